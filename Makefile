@@ -1,0 +1,33 @@
+# gaitopt — every target creates the virtual environment if it is missing.
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+
+.PHONY: install gaits studies test bench lint clean
+
+$(STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	touch $(STAMP)
+
+install: $(STAMP)
+
+gaits: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python -m gaitopt.gaits --out results
+
+test: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q
+
+bench: $(STAMP)
+	-$(BIN)/python -m pip install --quiet -e '.[peers]' || echo "Drake not installable here: benchmarking without peers"
+	MPLBACKEND=Agg $(BIN)/python -m gaitopt.bench --out results/bench.json
+
+lint: $(STAMP)
+	$(BIN)/ruff check gaitopt tests problems
+	$(BIN)/ruff format --check gaitopt tests problems
+
+clean:
+	rm -rf $(VENV) build *.egg-info .pytest_cache .ruff_cache
+	find . -name __pycache__ -type d -prune -exec rm -rf {} +

@@ -1,0 +1,38 @@
+"""gaitopt: gaits of the classic simple models of legged locomotion as periodic orbits of hybrid
+systems — multiple shooting with CasADi, Floquet multipliers, return maps, simulation.
+
+>>> import gaitopt
+>>> gait = gaitopt.find_limit_cycle(gaitopt.model("compass_gait"))
+>>> round(gait.period, 6), gait.stable
+(0.734461, True)
+"""
+
+from __future__ import annotations
+
+from .errors import GaitoptInputError, GuessError, ParameterError, StateError, UnknownModelError
+from .hybrid import HybridModel, Phase, Section, Transition
+from .models import REGISTRY, model
+from .result import LimitCycle, OrbitArc
+from .shooting import MultipleShooting, find_limit_cycle
+from .simulation import Simulation, simulate
+
+__all__ = [
+    "model",
+    "REGISTRY",
+    "find_limit_cycle",
+    "MultipleShooting",
+    "LimitCycle",
+    "OrbitArc",
+    "simulate",
+    "Simulation",
+    "HybridModel",
+    "Phase",
+    "Section",
+    "Transition",
+    "GaitoptInputError",
+    "UnknownModelError",
+    "ParameterError",
+    "StateError",
+    "GuessError",
+]
+__version__ = "0.1.0"

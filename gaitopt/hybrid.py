@@ -1,0 +1,323 @@
+"""The hybrid-system abstraction: phases, flows, guards, resets, the Poincaré section.
+
+A gait is a periodic orbit of a hybrid system: a cycle of *phases*, each a smooth flow
+``ẋ = f(x, u, p)`` that ends when a *guard* ``g(x, u, p)`` crosses zero in a stated direction,
+after which a *reset* ``x⁺ = r(x⁻, u, p)`` maps the state into the next phase (whose state may
+have another dimension).  An *admissibility* function excludes spurious crossings: a crossing
+counts only where it is positive (the compass gait's swing foot scuffing the ground mid-swing).
+
+Every function is a CasADi :class:`casadi.Function` of the state ``x``, the per-step input ``u``
+(constant over a step; empty for passive models) and the parameter vector ``p``.  Parameters are
+*symbolic* inputs, so a model class is built once and every parameter value reuses the graph.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import casadi as ca
+import numpy as np
+
+from .errors import StateError
+from .parameters import ParameterSpec, check_parameter, parameter_specs
+
+__all__ = ["Transition", "Phase", "Section", "HybridModel", "Symbols"]
+
+
+@dataclass(frozen=True)
+class Transition:
+    """A guard and its reset.
+
+    Attributes
+    ----------
+    name : str
+        What happens (``"heel strike"``).
+    guard : casadi.Function
+        ``g(x, u, p) -> scalar``; the transition fires when it crosses zero.
+    direction : int
+        ``+1``: fires when ``g`` increases through zero; ``-1``: when it decreases through zero.
+    reset : casadi.Function or None
+        ``r(x, u, p) -> x⁺`` in the target phase's coordinates; ``None`` ends the motion (a fall).
+    target : int or None
+        Index of the phase entered after the reset.
+    admissible : casadi.Function or None
+        ``a(x, u, p) -> scalar``; a crossing counts only where ``a > 0`` (spurious-crossing rule).
+    impact : bool
+        Whether the reset is an impact (changes velocities) rather than a relabelling.
+    foothold : str or None
+        Name of the phase point (see :attr:`Phase.points`) that becomes the new contact point,
+        for drawing successive steps; ``None`` if the contact does not move.
+    doc : str
+        The guard and reset equations, with their source.
+    """
+
+    name: str
+    guard: ca.Function
+    direction: int
+    reset: ca.Function | None
+    target: int | None
+    admissible: ca.Function | None = None
+    impact: bool = True
+    foothold: str | None = None
+    doc: str = ""
+
+    @property
+    def terminal(self) -> bool:
+        """Whether the motion ends here (a fall)."""
+        return self.reset is None
+
+
+@dataclass(frozen=True)
+class Phase:
+    """One smooth phase of the hybrid cycle.
+
+    Attributes
+    ----------
+    name : str
+        Phase name (``"stance"``, ``"three-link swing"``).
+    states : tuple of str
+        State names, in the order of the state vector.
+    flow : casadi.Function
+        ``f(x, u, p) -> ẋ``.
+    transitions : tuple of Transition
+        ``transitions[0]`` continues the gait cycle; the others (falls, backward steps) are
+        exits a simulation must honour and a gait must not touch.
+    conserved : mapping of str to casadi.Function
+        Quantities ``c(x, p)`` constant along the passive flow (``u = 0``), e.g. energy.
+    points : casadi.Function or None
+        ``points(x, p) -> 2×K`` positions (m) of named points for drawing, world frame (y up),
+        relative to the contact point.
+    point_names : tuple of str
+        Names of the columns of ``points``.
+    bodies : casadi.Function or None
+        ``bodies(x, p) -> (m, r, v)``: point masses (K×1, kg), positions and velocities (2×K,
+        world frame, relative to the contact point); for momentum and energy checks.
+    """
+
+    name: str
+    states: tuple[str, ...]
+    flow: ca.Function
+    transitions: tuple[Transition, ...]
+    conserved: Mapping[str, ca.Function] = field(default_factory=dict)
+    points: ca.Function | None = None
+    point_names: tuple[str, ...] = ()
+    bodies: ca.Function | None = None
+
+    @property
+    def n(self) -> int:
+        """State dimension."""
+        return len(self.states)
+
+
+@dataclass(frozen=True)
+class Section:
+    """The Poincaré section, parametrised by free coordinates.
+
+    The section lies in phase 0 (just after the reset that closes the cycle).  ``lift`` maps the
+    free coordinates to the full state so that its image is exactly the set the return map lands
+    in (the reset's image of the guard, within the level set of any conserved quantity).  The
+    return map in these coordinates therefore has only the nontrivial Floquet multipliers.
+
+    Attributes
+    ----------
+    coordinates : tuple of str
+        Names (a subset of phase 0's states) of the free coordinates.
+    lift : casadi.Function
+        ``lift(s, p) -> x``.
+    doc : str
+        Definition of the section.
+    """
+
+    coordinates: tuple[str, ...]
+    lift: ca.Function
+    doc: str = ""
+
+
+class Symbols:
+    """Symbolic parameters and helpers for a model's ``build`` classmethod.
+
+    ``sym.p`` is the parameter vector (CasADi SX); ``sym.slope`` etc. its named entries;
+    ``sym.u`` the per-step input vector.
+    """
+
+    def __init__(self, specs: Sequence[ParameterSpec], inputs: Sequence[str]):
+        self.p = ca.SX.sym("p", len(specs))
+        self.u = ca.SX.sym("u", len(inputs))
+        self._names = {s.name: i for i, s in enumerate(specs)}
+        self._inputs = {name: i for i, name in enumerate(inputs)}
+
+    def __getattr__(self, name: str) -> ca.SX:
+        if name.startswith("_"):
+            raise AttributeError(name)
+        if name in self._names:
+            return self.p[self._names[name]]
+        if name in self._inputs:
+            return self.u[self._inputs[name]]
+        raise AttributeError(f"model has no parameter or input named {name!r}")
+
+    @staticmethod
+    def states(*names: str) -> tuple[ca.SX, list[ca.SX]]:
+        """A state vector and its named elements."""
+        x = ca.SX.sym("x", len(names))
+        return x, [x[i] for i in range(len(names))]
+
+    def function(self, name: str, x: ca.SX, expr: Any) -> ca.Function:
+        """``name(x, u, p) -> expr``."""
+        return ca.Function(name, [x, self.u, self.p], [ca.SX(expr)], ["x", "u", "p"], [name])
+
+    def conserved(self, name: str, x: ca.SX, expr: Any) -> ca.Function:
+        """``name(x, p) -> expr`` (no input: conserved only along the passive flow)."""
+        return ca.Function(name, [x, self.p], [ca.SX(expr)], ["x", "p"], [name])
+
+    def lift(self, s: ca.SX, x_expr: Any) -> ca.Function:
+        """``lift(s, p) -> x``."""
+        return ca.Function("lift", [s, self.p], [ca.SX(x_expr)], ["s", "p"], ["x"])
+
+
+@dataclass(frozen=True)
+class _Structure:
+    phases: tuple[Phase, ...]
+    section: Section
+
+
+@dataclass(frozen=True)
+class HybridModel:
+    """Base class of every model: a frozen dataclass of physical parameters.
+
+    Subclasses declare parameters with :func:`gaitopt.parameters.parameter`, set the class
+    attributes below, and implement :meth:`build` (the CasADi functions, built once per class with
+    symbolic parameters) and :meth:`default_start`.  Changing a parameter makes a new model
+    (:func:`dataclasses.replace` or :meth:`replace`); the built functions are shared.
+    """
+
+    name: ClassVar[str] = ""
+    title: ClassVar[str] = ""
+    reference: ClassVar[str] = ""
+    inputs: ClassVar[tuple[str, ...]] = ()
+    input_units: ClassVar[tuple[str, ...]] = ()
+    _cache: ClassVar[dict[type, _Structure]] = {}
+
+    def __post_init__(self) -> None:
+        for spec in self.parameter_specs():
+            value = check_parameter(self.name, spec, getattr(self, spec.name))
+            object.__setattr__(self, spec.name, value)
+        self.check()
+
+    # -- what a subclass provides ------------------------------------------------------------
+    @classmethod
+    def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
+        """Build the phases and the section from symbolic parameters."""
+        raise NotImplementedError
+
+    def default_start(self) -> dict[str, float]:
+        """Section coordinates from which a simulation approaches the model's main gait."""
+        raise NotImplementedError
+
+    def check(self) -> None:
+        """Cross-parameter checks (raise :class:`~gaitopt.errors.ParameterError`)."""
+
+    # -- derived -----------------------------------------------------------------------------
+    @classmethod
+    def parameter_specs(cls) -> tuple[ParameterSpec, ...]:
+        """Specifications of the parameters, in the order of the vector ``p``."""
+        return parameter_specs(cls)
+
+    @classmethod
+    def _structure(cls) -> _Structure:
+        if cls not in HybridModel._cache:
+            sym = Symbols(cls.parameter_specs(), cls.inputs)
+            phases, section = cls.build(sym)
+            HybridModel._cache[cls] = _Structure(tuple(phases), section)
+        return HybridModel._cache[cls]
+
+    @property
+    def phases(self) -> tuple[Phase, ...]:
+        """The phases of one cycle, starting with the one that contains the section."""
+        return self._structure().phases
+
+    @property
+    def section(self) -> Section:
+        """The Poincaré section."""
+        return self._structure().section
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Names of the states on the section (phase 0)."""
+        return self.phases[0].states
+
+    @property
+    def params(self) -> dict[str, float]:
+        """Parameter name → value."""
+        return {s.name: getattr(self, s.name) for s in self.parameter_specs()}
+
+    @property
+    def p(self) -> np.ndarray:
+        """The parameter vector, in declaration order."""
+        return np.array([getattr(self, s.name) for s in self.parameter_specs()], dtype=float)
+
+    def replace(self, **changes: float) -> HybridModel:
+        """A copy with some parameters changed (checked like the constructor)."""
+        return dataclasses.replace(self, **changes)
+
+    def zero_input(self) -> np.ndarray:
+        """The passive input ``u = 0``."""
+        return np.zeros(len(self.inputs))
+
+    # -- states ------------------------------------------------------------------------------
+    def lift(self, coordinates: Mapping[str, float] | Sequence[float]) -> np.ndarray:
+        """Full phase-0 state from section coordinates (a mapping by name, or a sequence)."""
+        s = self.section_vector(coordinates)
+        return np.asarray(self.section.lift(s, self.p), dtype=float).ravel()
+
+    def section_vector(self, coordinates: Mapping[str, float] | Sequence[float]) -> np.ndarray:
+        """Section coordinates as a vector; missing names come from :meth:`default_start`."""
+        names = self.section.coordinates
+        if isinstance(coordinates, Mapping):
+            unknown = [k for k in coordinates if k not in names]
+            if unknown:
+                other = [k for k in unknown if k in self.state_names]
+                hint = (
+                    f"{other[0]!r} is fixed by the section ({self.section.doc})"
+                    if other
+                    else f"the section coordinates are {', '.join(names)}"
+                )
+                raise StateError(f"{self.name}: unknown state {unknown[0]!r}; {hint}")
+            values = {**self.default_start(), **coordinates}
+            vec = np.array([float(values[k]) for k in names])
+        else:
+            vec = np.asarray(coordinates, dtype=float).ravel()
+            if vec.size != len(names):
+                raise StateError(
+                    f"{self.name}: expected {len(names)} section coordinates "
+                    f"({', '.join(names)}), got {vec.size}"
+                )
+        if not np.all(np.isfinite(vec)):
+            raise StateError(f"{self.name}: section coordinates must be finite, got {vec}")
+        return vec
+
+    def state_vector(self, state: Mapping[str, float] | Sequence[float], phase: int = 0) -> np.ndarray:
+        """A full state of ``phase`` as a vector, from a complete mapping or sequence."""
+        names = self.phases[phase].states
+        if isinstance(state, Mapping):
+            unknown = [k for k in state if k not in names]
+            missing = [k for k in names if k not in state]
+            if unknown or missing:
+                bad = unknown[0] if unknown else missing[0]
+                what = "unknown" if unknown else "missing"
+                raise StateError(
+                    f"{self.name}: {what} state {bad!r}; the states are {', '.join(names)}"
+                )
+            vec = np.array([float(state[k]) for k in names])
+        else:
+            vec = np.asarray(state, dtype=float).ravel()
+        if vec.size != len(names) or not np.all(np.isfinite(vec)):
+            raise StateError(f"{self.name}: a state needs {len(names)} finite values ({', '.join(names)})")
+        return vec
+
+    def section_coordinates_of(self, x: np.ndarray) -> np.ndarray:
+        """Project a phase-0 state onto the section coordinates (pick the named entries)."""
+        idx = [self.state_names.index(c) for c in self.section.coordinates]
+        return np.asarray(x, dtype=float)[idx]

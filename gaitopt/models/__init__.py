@@ -1,0 +1,50 @@
+"""The models, one file each, and the registry behind :func:`gaitopt.model`."""
+
+from __future__ import annotations
+
+from ..errors import UnknownModelError
+from ..hybrid import HybridModel
+from .compass_gait import CompassGait
+from .rimless_wheel import RimlessWheel
+from .simplest_walker import SimplestWalker
+from .vanderpol import VanDerPol
+
+__all__ = ["REGISTRY", "model", "CompassGait", "RimlessWheel", "SimplestWalker", "VanDerPol"]
+
+REGISTRY: dict[str, type[HybridModel]] = {
+    cls.name: cls for cls in (VanDerPol, RimlessWheel, CompassGait, SimplestWalker)
+}
+
+
+def model(name: str, **params: float) -> HybridModel:
+    """Build a model by name with some parameters changed from their defaults.
+
+    Raises
+    ------
+    UnknownModelError
+        If ``name`` is not a registered model.
+    ParameterError
+        If a parameter is unknown, not a number, or out of range.
+    """
+    from ..errors import ParameterError
+
+    if name not in REGISTRY:
+        import difflib
+
+        close = difflib.get_close_matches(name, REGISTRY, n=1)
+        hint = f"did you mean {close[0]!r}? " if close else ""
+        raise UnknownModelError(
+            f"unknown model {name!r}; {hint}available: {', '.join(REGISTRY)}"
+        )
+    cls = REGISTRY[name]
+    known = [s.name for s in cls.parameter_specs()]
+    for key in params:
+        if key not in known:
+            import difflib
+
+            close = difflib.get_close_matches(key, known, n=1)
+            hint = f"did you mean {close[0]!r}? " if close else ""
+            raise ParameterError(
+                f"{name}: unknown parameter {key!r}; {hint}parameters: {', '.join(known)}"
+            )
+    return cls(**params)

@@ -1,0 +1,154 @@
+"""The result of :func:`gaitopt.find_limit_cycle`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["LimitCycle", "OrbitArc"]
+
+
+@dataclass
+class OrbitArc:
+    """One phase of the orbit, sampled densely (for plots and guard checks).
+
+    Attributes
+    ----------
+    phase : int
+        Phase index in ``model.phases``.
+    name : str
+        Phase name.
+    states : tuple of str
+        State names of the phase.
+    t : numpy.ndarray
+        Times (s), cumulative from the section.
+    x : numpy.ndarray
+        States, ``len(states) × len(t)``.
+    transition : str
+        The transition that ends the arc.
+    """
+
+    phase: int
+    name: str
+    states: tuple[str, ...]
+    t: np.ndarray
+    x: np.ndarray
+    transition: str
+
+
+@dataclass
+class LimitCycle:
+    """A periodic orbit (gait) of a hybrid model, or the record of a failed search.
+
+    Attributes
+    ----------
+    success : bool
+        True only if every check passed (see :func:`gaitopt.find_limit_cycle`).
+    message : str
+        What was found, or what failed and what to try.
+    model : HybridModel
+        The model (with its parameters).
+    period : float
+        Duration of one full orbit (s; dimensionless time for Garcia's walker and Van der Pol).
+    steps : int
+        Returns to the Poincaré section per orbit (heel strikes for walkers; k of a period-k gait).
+    state_names : tuple of str
+        Names of the section-phase states.
+    fixed_point : dict of str to float
+        The orbit's state on the section.
+    section_coordinates : tuple of str
+        Free coordinates of the section (the return map's coordinates).
+    multipliers : numpy.ndarray
+        Nontrivial Floquet multipliers (complex), eigenvalues of the return map's Jacobian in
+        section coordinates; empty when no gait was found.
+    stable : bool or None
+        Every multiplier has modulus < 1; ``None`` when no gait was found.
+    residual : float
+        Max-norm of the shooting equations at the solution.
+    verified : bool
+        An independent simulation from the fixed point returned to it.
+    verification_error : float
+        Max-norm difference between the simulated return and the fixed point (NaN if not run).
+    durations : numpy.ndarray
+        Phase durations (s), in the order of the phase cycle repeated ``steps`` times.
+    jacobian : numpy.ndarray
+        Jacobian of the return map in section coordinates (``steps`` returns).
+    input_jacobian : numpy.ndarray
+        Its derivative with respect to the per-step input (section coordinates × inputs).
+    inputs : numpy.ndarray
+        The per-step input the orbit was computed with.
+    orbit : list of OrbitArc
+        Dense samples of each phase of the orbit.
+    iterations : int
+        Newton (or IPOPT) iterations.
+    solve_time : float
+        Wall-clock seconds spent in :func:`find_limit_cycle`.
+    """
+
+    success: bool
+    message: str
+    model: Any
+    period: float = float("nan")
+    steps: int = 1
+    state_names: tuple[str, ...] = ()
+    fixed_point: dict[str, float] = field(default_factory=dict)
+    section_coordinates: tuple[str, ...] = ()
+    multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0, complex))
+    stable: bool | None = None
+    residual: float = float("nan")
+    verified: bool = False
+    verification_error: float = float("nan")
+    durations: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    jacobian: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    input_jacobian: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    inputs: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    orbit: list[OrbitArc] = field(default_factory=list)
+    iterations: int = 0
+    solve_time: float = float("nan")
+
+    @property
+    def x(self) -> np.ndarray:
+        """The fixed point as a vector (state order)."""
+        return np.array([self.fixed_point[k] for k in self.state_names])
+
+    @property
+    def section_point(self) -> np.ndarray:
+        """The fixed point in section coordinates."""
+        return np.array([self.fixed_point[k] for k in self.section_coordinates])
+
+    def as_dict(self) -> dict[str, Any]:
+        """The JSON object of ``gaitopt solve --json`` (see DESIGN.md, public contract)."""
+        return {
+            "model": self.model.name,
+            "params": self.model.params,
+            "success": bool(self.success),
+            "message": self.message,
+            "period": _num(self.period),
+            "steps": int(self.steps),
+            "state_names": list(self.state_names),
+            "fixed_point": {k: _num(v) for k, v in self.fixed_point.items()},
+            "multipliers": [[float(z.real), float(z.imag)] for z in self.multipliers],
+            "stable": self.stable,
+            "residual": _num(self.residual),
+            "verified": bool(self.verified),
+            "section_coordinates": list(self.section_coordinates),
+            "inputs": dict(zip(self.model.inputs, map(float, self.inputs))),
+            "durations": [float(d) for d in self.durations],
+            "verification_error": _num(self.verification_error),
+            "iterations": int(self.iterations),
+            "solve_time": _num(self.solve_time),
+        }
+
+    def __repr__(self) -> str:
+        mods = ", ".join(f"{abs(z):.4g}" for z in self.multipliers)
+        return (
+            f"LimitCycle({self.model.name}, success={self.success}, period={self.period:.10g}, "
+            f"|multipliers|=[{mods}], stable={self.stable}, verified={self.verified})"
+        )
+
+
+def _num(x: float) -> float | None:
+    x = float(x)
+    return x if np.isfinite(x) else None

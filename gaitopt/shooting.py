@@ -1,0 +1,499 @@
+"""Limit cycles of hybrid models by multiple shooting, solved with CasADi.
+
+Transcription (one stage per phase, resets as linking constraints; rockit's layout):
+
+* unknowns ``w = [s; z]``: the section coordinates ``s`` of the orbit's first state, then for each
+  phase of the cycle (repeated ``steps`` times for a period-k orbit) its segment start states and
+  its free duration ``T``;
+* equations: inside each phase, the end of segment j is the start of segment j + 1 (*close the
+  gaps*); the last segment ends on the phase's guard (*impact at the phase end*); the reset of that
+  end state is the next phase's first state (*reset links the phases*); and after the last phase,
+  the reset state has the section coordinates ``s`` again (*periodicity*).  For smooth autonomous
+  systems the section equation, built into ``lift(s)``, is the phase condition.
+
+The system is square; Newton (CasADi ``rootfinder``, with line search) solves it, or IPOPT
+(``nlpsol``) as a feasibility problem with positive durations.  The guess comes from a simulation.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from .errors import GaitoptInputError, GuessError
+from .hybrid import HybridModel
+from .integrators import segment_function, segment_trajectory_function
+from .result import LimitCycle, OrbitArc
+from .simulation import Simulation, simulate
+from .stability import is_stable, section_jacobians
+
+__all__ = ["MultipleShooting", "find_limit_cycle"]
+
+_METHODS = ("newton", "ipopt")
+
+
+@dataclass(frozen=True)
+class MultipleShooting:
+    """The discretisation: how each phase is cut and integrated.
+
+    Attributes
+    ----------
+    segments : int
+        Shooting segments per phase (equal fractions of the free phase duration).
+    steps : int
+        Fixed RK steps (Dormand–Prince order 8) per segment.
+    dense : int
+        Samples per segment for the guard check and the plotted orbit.
+    """
+
+    segments: int = 4
+    steps: int = 5
+    dense: int = 16
+
+    def __post_init__(self) -> None:
+        for name in ("segments", "steps", "dense"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or value < 1:
+                raise GaitoptInputError(
+                    f"MultipleShooting: `{name}` must be a positive integer, got {value!r}"
+                )
+
+
+class Transcription:
+    """The shooting equations of a model class for a number of cycles (built once, cached)."""
+
+    def __init__(self, model_cls: type[HybridModel], disc: MultipleShooting, cycles: int):
+        structure = model_cls._structure()
+        self.phases = structure.phases
+        self.section = structure.section
+        self.cycles = cycles
+        self.disc = disc
+        self.chain = [i for _ in range(cycles) for i in range(len(self.phases))]
+        S = disc.segments
+        states0 = self.phases[0].states
+        self.section_index = [states0.index(c) for c in self.section.coordinates]
+        m = len(self.section.coordinates)
+        self.m = m
+
+        s = ca.MX.sym("s", m)
+        u = ca.MX.sym("u", len(model_cls.inputs))
+        p = ca.MX.sym("p", len(model_cls.parameter_specs()))
+        segment = {i: segment_function(ph.flow, disc.steps).map(S) for i, ph in enumerate(self.phases)}
+        sampler = {
+            i: segment_trajectory_function(ph.flow, disc.dense).map(S)
+            for i, ph in enumerate(self.phases)
+        }
+
+        z_parts, self.layout = [], []  # layout: (kind, chain index, offset, shape)
+        nodes, durations = [], []
+        offset = m
+        for k, i in enumerate(self.chain):
+            n = self.phases[i].n
+            free_cols = S - 1 if k == 0 else S
+            free = ca.MX.sym(f"X{k}", n, free_cols)
+            X = ca.horzcat(self.section.lift(s, p), free) if k == 0 else free
+            T = ca.MX.sym(f"T{k}")
+            z_parts += [ca.vec(free), T]
+            self.layout.append(("nodes", k, offset, (n, free_cols)))
+            offset += n * free_cols
+            self.layout.append(("duration", k, offset, ()))
+            offset += 1
+            nodes.append(X)
+            durations.append(T)
+        self.size = offset
+        w = ca.vertcat(s, *z_parts)
+
+        G, ends, dg, adm, samples = [], [], [], [], []
+        for k, i in enumerate(self.chain):
+            phase, X, T = self.phases[i], nodes[k], durations[k]
+            tr = phase.transitions[0]
+            X_end = segment[i](X, u, p, T / S)
+            G.append(ca.vec(X[:, 1:] - X_end[:, :-1]))  # close the gaps
+            x_end = X_end[:, -1]
+            G.append(tr.guard(x_end, u, p))  # the phase ends on its guard
+            x_next = tr.reset(x_end, u, p)
+            if k + 1 < len(self.chain):
+                G.append(nodes[k + 1][:, 0] - x_next)  # the reset links to the next phase
+            else:
+                x_return = x_next
+            ends.append(x_end)
+            # Crossing direction at the end: d/dt g = ∇g · f.
+            dg.append(_guard_rate(phase, tr)(x_end, u, p))
+            adm.append(tr.admissible(x_end, u, p) if tr.admissible is not None else ca.MX(1))
+            samples.append(sampler[i](X, u, p, T / S))
+        G = ca.vertcat(*G)
+        P = x_return[self.section_index]
+        self.n_g = G.shape[0]
+        F = ca.vertcat(G, P - s)  # periodicity closes the cycle
+        assert F.shape[0] == self.size, "shooting system must be square"
+
+        self.residual = ca.Function("residual", [w, u, p], [F], ["w", "u", "p"], ["F"])
+        self.newton = ca.rootfinder(
+            "limit_cycle", "newton", self.residual,
+            {"error_on_fail": False, "abstol": 1e-13, "abstolStep": 1e-15, "max_iter": 40},
+        )
+        GP = ca.vertcat(G, P)
+        self.linearisation = ca.Function(
+            "linearisation", [w, u, p],
+            [ca.jacobian(GP, w), ca.jacobian(GP, u), F, x_return],
+            ["w", "u", "p"], ["J_w", "J_u", "F", "x_return"],
+        )
+        self.checks = ca.Function(
+            "checks", [w, u, p],
+            [ca.horzcat(*ends), ca.vertcat(*dg), ca.vertcat(*adm), ca.vertcat(*durations)],
+        )
+        self.sample = ca.Function("sample", [w, u, p], samples)
+        self._w, self._u, self._p, self._F = w, u, p, F
+        self._ipopt = None
+
+    # -- packing ------------------------------------------------------------------------------
+    def pack(self, s: np.ndarray, nodes: list[np.ndarray], durations: list[float]) -> np.ndarray:
+        """Unknown vector from section coordinates, per-chain node arrays (n × S) and durations."""
+        w = np.zeros(self.size)
+        w[: self.m] = s
+        for kind, k, off, shape in self.layout:
+            if kind == "nodes":
+                block = nodes[k][:, 1:] if k == 0 else nodes[k]
+                w[off : off + block.size] = block.ravel(order="F")
+            else:
+                w[off] = durations[k]
+        return w
+
+    def ipopt(self) -> ca.Function:
+        """IPOPT on the feasibility problem ``F(w) = 0`` with positive durations."""
+        if self._ipopt is None:
+            nlp = {"x": self._w, "p": ca.vertcat(self._u, self._p), "f": 0, "g": self._F}
+            self._ipopt = ca.nlpsol(
+                "limit_cycle_ipopt", "ipopt", nlp,
+                {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": 1e-14,
+                 "ipopt.constr_viol_tol": 1e-13, "ipopt.max_iter": 200, "error_on_fail": False},
+            )
+        return self._ipopt
+
+    def duration_index(self) -> list[int]:
+        """Positions of the durations in ``w``."""
+        return [off for kind, _, off, _ in self.layout if kind == "duration"]
+
+
+def _guard_rate(phase, transition) -> ca.Function:
+    """``ġ(x, u, p) = ∇g(x) · f(x)``: the guard's rate of change along the flow."""
+    f = phase.flow
+    x, u, p = (ca.SX.sym(n, f.size1_in(i)) for i, n in enumerate(("x", "u", "p")))
+    rate = ca.jtimes(transition.guard(x, u, p), x, f(x, u, p))
+    return ca.Function("guard_rate", [x, u, p], [rate])
+
+
+@lru_cache(maxsize=64)
+def transcription(model_cls: type[HybridModel], disc: MultipleShooting, cycles: int) -> Transcription:
+    """The cached :class:`Transcription` (parameters are symbolic, so one per model class)."""
+    return Transcription(model_cls, disc, cycles)
+
+
+def find_limit_cycle(
+    model: HybridModel,
+    guess: Mapping[str, float] | LimitCycle | None = None,
+    *,
+    steps: int = 1,
+    inputs: Any = None,
+    discretisation: MultipleShooting = MultipleShooting(),
+    method: str = "newton",
+    verify: bool = True,
+    tol: float = 1e-10,
+) -> LimitCycle:
+    """Find a periodic orbit (gait) of a hybrid model by multiple shooting.
+
+    Parameters
+    ----------
+    model : HybridModel
+        The model, with its parameters.
+    guess : mapping, LimitCycle or None
+        Section coordinates to start from (missing ones from ``model.default_start()``), or a
+        previous result (warm start).  The shooting guess is a simulation of ``steps`` returns
+        from there; ``None`` starts from the model's default start.
+    steps : int
+        Returns to the section per orbit (``2`` for a period-2 gait).
+    inputs : array_like, optional
+        Constant per-step input (``model.inputs``); default passive.
+    discretisation : MultipleShooting
+        Segments per phase and RK steps per segment.
+    method : {"newton", "ipopt"}
+        CasADi Newton rootfinder on the square system, or IPOPT (``nlpsol``) with durations
+        bounded positive.
+    verify : bool
+        Check the orbit by independent simulation (:func:`gaitopt.simulate`).
+    tol : float
+        Largest accepted residual of the shooting equations and, scaled by 1e3, the largest
+        accepted difference between the simulated return and the fixed point.
+
+    Returns
+    -------
+    LimitCycle
+        ``success`` is True only if the equations are solved to ``tol``, every phase duration is
+        positive, each phase ends on its guard in the stated direction where the crossing is
+        admissible, no guard is crossed earlier inside a phase (dense samples), for ``steps > 1``
+        the orbit is not a shorter one repeated, and (with ``verify``) a simulation from the fixed
+        point returns to it.  Otherwise ``message`` says what failed.
+
+    Raises
+    ------
+    GuessError
+        If an explicit ``guess`` never reaches the next transition in simulation.
+    """
+    start = time.perf_counter()
+    if method not in _METHODS:
+        raise GaitoptInputError(f"`method` must be one of {', '.join(_METHODS)}, got {method!r}")
+    if not isinstance(steps, int) or steps < 1:
+        raise GaitoptInputError(f"`steps` must be a positive integer, got {steps!r}")
+    u = model.zero_input() if inputs is None else np.asarray(inputs, dtype=float).ravel()
+    if u.size != len(model.inputs):
+        raise GaitoptInputError(
+            f"`inputs` must have {len(model.inputs)} entries ({', '.join(model.inputs) or 'none'})"
+        )
+    tr = transcription(type(model), discretisation, steps)
+    p = model.p
+
+    def fail(message: str, **extra: Any) -> LimitCycle:
+        return LimitCycle(
+            False, message, model, steps=steps, state_names=model.state_names,
+            section_coordinates=model.section.coordinates, inputs=u,
+            solve_time=time.perf_counter() - start, **extra,
+        )
+
+    # -- guess from a simulation ---------------------------------------------------------------
+    explicit = guess is not None
+    if isinstance(guess, LimitCycle):
+        s0 = guess.section_point
+    else:
+        s0 = model.section_vector(guess if guess is not None else {})
+    sim = simulate(model, model.lift(s0), steps=steps, inputs=u, max_phase_time=_time_limit(model))
+    if not sim.success:
+        where = ", ".join(f"{k}={v:.6g}" for k, v in zip(model.section.coordinates, s0))
+        if explicit and not isinstance(guess, LimitCycle):
+            raise GuessError(
+                f"{model.name}: `guess` {where} leads nowhere: {sim.message}; "
+                f"try another guess (e.g. from `gaitopt simulate {model.name}`)"
+            )
+        return fail(f"no gait found: the simulation from {where} does not complete "
+                    f"{steps} step(s) ({sim.message}); the gait may not exist at these parameters")
+    w0 = tr.pack(s0, *_nodes_from_simulation(sim, tr))
+
+    # -- solve ------------------------------------------------------------------------------------
+    if method == "newton":
+        w = np.asarray(tr.newton(w0, u, p), dtype=float).ravel()
+        stats = tr.newton.stats()
+        converged, iterations = bool(stats["success"]), int(stats["iter_count"])
+    else:
+        lbx = np.full(tr.size, -np.inf)
+        lbx[tr.duration_index()] = 1e-9
+        sol = tr.ipopt()(x0=w0, p=np.concatenate([u, p]), lbg=0, ubg=0, lbx=lbx)
+        stats = tr.ipopt().stats()
+        w = np.asarray(sol["x"], dtype=float).ravel()
+        converged, iterations = bool(stats["success"]), int(stats["iter_count"])
+
+    J_w, J_u, F, x_return = (np.asarray(v, dtype=float) for v in tr.linearisation(w, u, p))
+    residual = float(np.max(np.abs(F))) if np.all(np.isfinite(F)) else float("inf")
+    ends, dg, adm, durations = (np.asarray(v, dtype=float) for v in tr.checks(w, u, p))
+    durations = durations.ravel()
+    s_star = w[: tr.m]
+    x_star = model.lift(s_star)
+    common = dict(
+        residual=residual, iterations=iterations, durations=durations,
+        period=float(np.sum(durations)),
+        fixed_point=dict(zip(model.state_names, map(float, x_star))),
+    )
+    if not converged or not residual <= tol:
+        return fail(
+            f"{method} did not converge (residual {residual:.3g} after {iterations} iterations; "
+            f"tolerance {tol:g}); try a guess closer to the gait"
+            + (" or method='ipopt'" if method == "newton" else ""),
+            **common,
+        )
+
+    # -- no false gaits ----------------------------------------------------------------------
+    problem = _check_orbit(model, tr, w, u, p, ends, dg.ravel(), adm.ravel(), durations, x_return, x_star)
+    orbit = _orbit_arcs(model, tr, w, u, p, durations)
+    if problem is None:
+        problem = _check_dense(model, tr, orbit, u, p)
+    if problem is None and steps > 1:
+        problem = _check_minimal_period(model, tr, w, steps)
+    if problem is not None:
+        return fail(problem, orbit=orbit, **common)
+
+    A, B = section_jacobians(J_w, J_u, tr.m, tr.n_g)
+    multipliers = np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
+    multipliers = multipliers[np.argsort(-np.abs(multipliers))]
+
+    verified, error, vmessage = False, float("nan"), "not verified by simulation (verify=False)"
+    if verify:
+        verified, error, vmessage = _verify(model, x_star, durations, steps, u, tol * 1e3)
+    success = verified or not verify
+    message = (
+        f"periodic orbit found (residual {residual:.2g}); " + vmessage
+        if success
+        else "the shooting solution is not confirmed: " + vmessage
+    )
+    return LimitCycle(
+        success=success,
+        message=message,
+        model=model,
+        steps=steps,
+        state_names=model.state_names,
+        section_coordinates=model.section.coordinates,
+        multipliers=multipliers if success else np.zeros(0, complex),
+        stable=is_stable(multipliers) if success else None,
+        verified=verified,
+        verification_error=error,
+        jacobian=A,
+        input_jacobian=B,
+        inputs=u,
+        orbit=orbit,
+        solve_time=time.perf_counter() - start,
+        **common,
+    )
+
+
+def _time_limit(model: HybridModel) -> float:
+    return float(getattr(model, "max_phase_time", 30.0))
+
+
+def _nodes_from_simulation(sim: Simulation, tr: Transcription) -> tuple[list[np.ndarray], list[float]]:
+    """Segment start states and phase durations of the simulated orbit, in chain order."""
+    S = tr.disc.segments
+    nodes, durations = [], []
+    arcs = sim.arcs[: len(tr.chain)]
+    for arc in arcs:
+        T = arc.t1 - arc.t0
+        t = arc.t0 + T * np.arange(S) / S
+        nodes.append(np.atleast_2d(arc.solution(t)).reshape(-1, S))
+        durations.append(T)
+    return nodes, durations
+
+
+def _phase_label(model: HybridModel, tr: Transcription, k: int) -> str:
+    name = model.phases[tr.chain[k]].name
+    return f"phase '{name}'" + (f" (step {k // len(model.phases) + 1})" if tr.cycles > 1 else "")
+
+
+def _check_orbit(model, tr, w, u, p, ends, dg, adm, durations, x_return, x_star) -> str | None:
+    """Durations positive; each phase ends on its guard, admissibly and in the stated direction."""
+    for k, i in enumerate(tr.chain):
+        phase = model.phases[i]
+        transition = phase.transitions[0]
+        label = _phase_label(model, tr, k)
+        if not durations[k] > 0:
+            return (
+                f"no gait: {label} would last {durations[k]:.3g} s (durations must be positive); "
+                f"the orbit through this guess runs backwards in time — the gait may not exist "
+                f"at these parameters"
+            )
+        if not adm[k] > 0:
+            return (
+                f"no gait: {label} ends on '{transition.name}' where that crossing is excluded "
+                f"(spurious crossing rule: {transition.doc})"
+            )
+        if not transition.direction * dg[k] > 0:
+            return (
+                f"no gait: {label} reaches '{transition.name}' in the wrong direction "
+                f"(grazing or from the other side)"
+            )
+    error = float(np.max(np.abs(np.asarray(x_return).ravel() - x_star)))
+    if error > 1e-8 * (1 + np.max(np.abs(x_star))):
+        return (
+            f"internal inconsistency: the return state leaves the section parametrisation by "
+            f"{error:.3g}; the model's section lift does not match its reset"
+        )
+    return None
+
+
+def _orbit_arcs(model, tr, w, u, p, durations) -> list[OrbitArc]:
+    samples = tr.sample(w, u, p)
+    samples = samples if isinstance(samples, (list, tuple)) else [samples]
+    S, q = tr.disc.segments, tr.disc.dense
+    arcs, t0 = [], 0.0
+    for k, i in enumerate(tr.chain):
+        X = np.asarray(samples[k], dtype=float)
+        # Each segment gives q + 1 samples; drop the duplicated segment starts.
+        keep = [j for j in range(X.shape[1]) if j % (q + 1) != 0 or j == 0]
+        X = X[:, keep]
+        t = t0 + np.linspace(0.0, durations[k], X.shape[1])
+        phase = model.phases[i]
+        arcs.append(OrbitArc(i, phase.name, phase.states, t, X, phase.transitions[0].name))
+        t0 += durations[k]
+    del S
+    return arcs
+
+
+def _check_dense(model, tr, orbit, u, p) -> str | None:
+    """No guard of the phase is crossed (admissibly, in its direction) before the phase ends."""
+    for k, arc in enumerate(orbit):
+        phase = model.phases[arc.phase]
+        K = arc.x.shape[1]
+        for j, transition in enumerate(phase.transitions):
+            g = transition.direction * np.asarray(
+                transition.guard.map(K)(arc.x, u, p), dtype=float
+            ).ravel()
+            a = (
+                np.asarray(transition.admissible.map(K)(arc.x, u, p), dtype=float).ravel()
+                if transition.admissible is not None
+                else np.ones(K)
+            )
+            scale = 1e-9 * (1 + np.max(np.abs(g)))
+            armed = np.maximum.accumulate(g < -scale)
+            last = K - 1 if j == 0 else K  # the cycle transition fires at the last sample
+            for idx in range(1, last):
+                if armed[idx - 1] and g[idx - 1] < 0 <= g[idx] and (a[idx - 1] > 0 or a[idx] > 0):
+                    t = arc.t[idx]
+                    return (
+                        f"no gait: the orbit crosses '{transition.name}' inside "
+                        f"{_phase_label(model, tr, k)} at t = {t:.4g} s, before the phase ends "
+                        f"(e.g. a foot through the ground); not a gait with this phase sequence"
+                    )
+    return None
+
+
+def _check_minimal_period(model, tr, w, steps) -> str | None:
+    """A period-k orbit must not be a shorter orbit repeated."""
+    starts = []
+    n_phases = len(model.phases)
+    for kind, k, off, shape in tr.layout:
+        if kind == "nodes" and k % n_phases == 0 and k > 0:
+            n = shape[0]
+            starts.append(w[off : off + n])
+    x0 = model.lift(w[: tr.m])
+    for j, xj in enumerate(starts, start=1):
+        if steps % j == 0 and np.max(np.abs(xj - x0)) < 1e-6 * (1 + np.max(np.abs(x0))):
+            return (
+                f"no period-{steps} gait here: the orbit found is the period-{j} gait repeated; "
+                f"try a guess on the period-{steps} orbit (past its period doubling)"
+            )
+    return None
+
+
+def _verify(model, x_star, durations, steps, u, tol) -> tuple[bool, float, str]:
+    """Simulate from the fixed point with SciPy and compare the return and the timing."""
+    sim = simulate(model, x_star, steps=steps, inputs=u, max_phase_time=_time_limit(model))
+    if not sim.success:
+        return False, float("inf"), f"the simulation from the fixed point fails: {sim.message}"
+    expected = len(durations)
+    if len(sim.arcs) != expected:
+        return False, float("inf"), (
+            f"the simulation passes {len(sim.arcs)} phases where the orbit has {expected}"
+        )
+    error = float(np.max(np.abs(sim.section_states[-1] - x_star)))
+    sim_durations = np.array([a.t1 - a.t0 for a in sim.arcs])
+    timing = float(np.max(np.abs(sim_durations - durations)))
+    scale = 1 + float(np.max(np.abs(x_star)))
+    if error > tol * scale or timing > tol * (1 + float(np.sum(durations))):
+        return False, error, (
+            f"the simulation from the fixed point returns {error:.3g} away (phase timing differs "
+            f"by {timing:.3g} s; tolerance {tol:g})"
+        )
+    return True, error, (
+        f"verified by simulation: return error {error:.2g}, timing error {timing:.2g} s"
+    )

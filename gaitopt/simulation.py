@@ -1,0 +1,312 @@
+"""Independent hybrid simulation: SciPy's adaptive integrators with located, directional events.
+
+This is deliberately independent of the shooting integrator (adaptive steps and event location
+here, fixed-step shooting with guard constraints there), so each can check the other.
+
+The loop is SciPy's ``solve_ivp`` event logic (step, check signs, locate the root with ``brentq``
+on the step's dense output), driving :class:`scipy.integrate.DOP853` (or another ``OdeSolver``)
+step by step, with two additions that hybrid walking models need:
+
+* *strict crossings*: a guard fires only after it has been strictly on its pre-crossing side in
+  this phase (a phase that starts on a guard, such as Van der Pol's section, does not fire at
+  once — the case ``solve_ivp`` fires at ``t0``);
+* *admissibility*: a crossing where the model's rule says it is spurious (the compass gait's
+  mid-swing foot scuff) is ignored and integration goes on.
+
+After a reset the integration restarts in the target phase.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.integrate import DOP853, LSODA, RK45, OdeSolution, Radau
+from scipy.optimize import brentq
+
+from .errors import GaitoptInputError
+from .hybrid import HybridModel, Phase
+
+__all__ = ["simulate", "Simulation", "Arc", "Event"]
+
+_METHODS = {"DOP853": DOP853, "RK45": RK45, "Radau": Radau, "LSODA": LSODA}
+# A guard must have been below -_ARM (in units of the guard) before it can fire.
+_ARM = 1e-10
+
+InputPolicy = Callable[[int, np.ndarray], np.ndarray]
+
+
+@dataclass
+class Arc:
+    """One phase of a simulated trajectory.
+
+    Attributes
+    ----------
+    phase : int
+        Index of the phase in ``model.phases``.
+    t0, t1 : float
+        Start and end time (s).
+    solution : scipy.integrate.OdeSolution
+        Dense output on ``[t0, t1]``.
+    u : numpy.ndarray
+        Per-step input in force during the arc.
+    """
+
+    phase: int
+    t0: float
+    t1: float
+    solution: OdeSolution
+    u: np.ndarray
+
+    def sample(self, count: int = 50) -> tuple[np.ndarray, np.ndarray]:
+        """``count`` times on ``[t0, t1]`` and the states there (n × count)."""
+        t = np.linspace(self.t0, self.t1, count)
+        return t, self.solution(t)
+
+
+@dataclass
+class Event:
+    """A transition that fired.
+
+    Attributes
+    ----------
+    t : float
+        Time (s).
+    phase : int
+        Phase that ended.
+    transition : str
+        Transition name.
+    state_before, state_after : numpy.ndarray
+        States just before and just after the reset (``state_after`` is None for a fall).
+    """
+
+    t: float
+    phase: int
+    transition: str
+    state_before: np.ndarray
+    state_after: np.ndarray | None
+
+
+@dataclass
+class Simulation:
+    """Result of :func:`simulate`.
+
+    Attributes
+    ----------
+    success : bool
+        Whether the requested number of steps was completed.
+    status : str
+        ``"completed"``, ``"fell"`` (a terminal transition), ``"timeout"`` (no transition within
+        ``max_phase_time``) or ``"failed"`` (the integrator failed).
+    message : str
+        What happened, in words.
+    arcs : list of Arc
+        The smooth pieces, in order.
+    events : list of Event
+        The transitions, in order.
+    section_times : numpy.ndarray
+        Times of the returns to the section (the first entry is the start).
+    section_states : numpy.ndarray
+        Phase-0 states at those returns (rows).
+    """
+
+    success: bool
+    status: str
+    message: str
+    arcs: list[Arc] = field(default_factory=list)
+    events: list[Event] = field(default_factory=list)
+    section_times: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    section_states: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+
+    @property
+    def steps(self) -> int:
+        """Completed returns to the section."""
+        return max(len(self.section_times) - 1, 0)
+
+
+class _PhaseFunctions:
+    """Numerical callables of one phase, for fixed ``u`` and ``p``."""
+
+    def __init__(self, phase: Phase, u: np.ndarray, p: np.ndarray):
+        self.phase = phase
+        self.u, self.p = u, p
+        self._flow = phase.flow
+        self._jac = None
+
+    def rhs(self, t: float, x: np.ndarray) -> np.ndarray:
+        return np.asarray(self._flow(x, self.u, self.p)).ravel()
+
+    def jac(self, t: float, x: np.ndarray) -> np.ndarray:
+        if self._jac is None:
+            self._jac = self._flow.factory("jac", ["x", "u", "p"], ["jac:flow:x"])
+        return np.asarray(self._jac(x, self.u, self.p))
+
+    def signed_guard(self, k: int, x: np.ndarray) -> float:
+        tr = self.phase.transitions[k]
+        return tr.direction * float(tr.guard(x, self.u, self.p))
+
+    def admissible(self, k: int, x: np.ndarray) -> bool:
+        tr = self.phase.transitions[k]
+        return tr.admissible is None or float(tr.admissible(x, self.u, self.p)) > 0
+
+
+def simulate(
+    model: HybridModel,
+    x0: Mapping[str, float] | Sequence[float] | np.ndarray | None = None,
+    *,
+    steps: int = 10,
+    phase: int = 0,
+    inputs: Sequence[float] | np.ndarray | InputPolicy | None = None,
+    method: str = "DOP853",
+    rtol: float = 1e-11,
+    atol: float = 1e-12,
+    max_phase_time: float = 30.0,
+) -> Simulation:
+    """Simulate a hybrid model for a number of steps.
+
+    Parameters
+    ----------
+    model : HybridModel
+        The model.
+    x0 : mapping, sequence or None
+        Start state of ``phase``: a full state (mapping by name or vector); for phase 0 a mapping
+        may give only section coordinates (the rest from :meth:`HybridModel.lift`).  ``None``:
+        the model's default start.
+    steps : int
+        Number of returns to the Poincaré section to simulate.
+    phase : int
+        Phase in which ``x0`` lies.
+    inputs : array_like or callable, optional
+        Per-step input: a constant vector, or ``policy(step, x_section) -> u`` called at each
+        return to the section.  Default: passive (zeros).
+    method : str
+        SciPy integrator: ``"DOP853"`` (default), ``"RK45"``, ``"Radau"``, ``"LSODA"``.
+    rtol, atol : float
+        Integrator tolerances.
+    max_phase_time : float
+        A phase that lasts longer than this (s) ends the simulation with ``status="timeout"``.
+
+    Returns
+    -------
+    Simulation
+    """
+    if method not in _METHODS:
+        raise GaitoptInputError(f"`method` must be one of {', '.join(_METHODS)}, got {method!r}")
+    if int(steps) != steps or steps < 0:
+        raise GaitoptInputError(f"`steps` must be a non-negative integer, got {steps!r}")
+    x = _initial_state(model, x0, phase)
+    p = model.p
+    policy = _as_policy(model, inputs)
+    solver_cls = _METHODS[method]
+
+    sim = Simulation(False, "completed", "")
+    sec_t: list[float] = []
+    sec_x: list[np.ndarray] = []
+    t = 0.0
+    u = policy(0, x) if phase == 0 else policy(0, x)
+    if phase == 0:
+        sec_t.append(t)
+        sec_x.append(x.copy())
+    cycle_end = (len(model.phases) - 1, 0)  # (phase, transition) that closes a cycle
+    while len(sec_t) - 1 < steps or (phase != 0 and steps > 0):
+        funcs = _PhaseFunctions(model.phases[phase], u, p)
+        arc, fired, x_minus, status = _integrate_phase(
+            funcs, solver_cls, t, x, rtol, atol, max_phase_time, method
+        )
+        sim.arcs.append(Arc(phase, t, arc.t_max, arc, u))
+        t = arc.t_max
+        if status is not None:
+            sim.status = status
+            sim.message = (
+                f"no transition within {max_phase_time:g} s in phase "
+                f"'{model.phases[phase].name}' (t = {t:.6g})"
+                if status == "timeout"
+                else f"integrator failed in phase '{model.phases[phase].name}' at t = {t:.6g}"
+            )
+            break
+        tr = model.phases[phase].transitions[fired]
+        if tr.terminal:
+            sim.events.append(Event(t, phase, tr.name, x_minus, None))
+            sim.status = "fell"
+            sim.message = f"{tr.name} at t = {t:.6g} s after {len(sec_t) - 1} steps"
+            break
+        x = np.asarray(tr.reset(x_minus, u, p), dtype=float).ravel()
+        sim.events.append(Event(t, phase, tr.name, x_minus, x.copy()))
+        closes_cycle = (phase, fired) == cycle_end
+        phase = tr.target
+        if closes_cycle:
+            sec_t.append(t)
+            sec_x.append(x.copy())
+            if len(sec_t) - 1 < steps:
+                u = policy(len(sec_t) - 1, x)
+    sim.success = sim.status == "completed"
+    if sim.success:
+        sim.message = f"{len(sec_t) - 1} steps in {t:.6g} s"
+    sim.section_times = np.array(sec_t)
+    sim.section_states = np.array(sec_x) if sec_x else np.zeros((0, len(model.state_names)))
+    return sim
+
+
+def _initial_state(model: HybridModel, x0, phase: int) -> np.ndarray:
+    if x0 is None:
+        if phase != 0:
+            raise GaitoptInputError("`x0` is required when starting outside phase 0")
+        return model.lift(model.default_start())
+    names = model.phases[phase].states
+    if isinstance(x0, Mapping) and phase == 0 and set(x0) != set(names):
+        if set(x0) <= set(model.section.coordinates):
+            return model.lift(x0)
+    return model.state_vector(x0, phase)
+
+
+def _as_policy(model: HybridModel, inputs) -> InputPolicy:
+    if callable(inputs):
+        return lambda k, x: np.asarray(inputs(k, x), dtype=float).ravel()
+    u = model.zero_input() if inputs is None else np.asarray(inputs, dtype=float).ravel()
+    if u.size != len(model.inputs):
+        raise GaitoptInputError(
+            f"`inputs` must have {len(model.inputs)} entries ({', '.join(model.inputs) or 'none'}),"
+            f" got {u.size}"
+        )
+    return lambda k, x: u
+
+
+def _integrate_phase(funcs: _PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_time, method):
+    """Integrate one phase until an admissible directional crossing; locate it."""
+    kwargs = {"jac": funcs.jac} if method in ("Radau", "LSODA") else {}
+    solver = solver_cls(funcs.rhs, t0, x0, t0 + max_time, rtol=rtol, atol=atol, **kwargs)
+    n_tr = len(funcs.phase.transitions)
+    values = np.array([funcs.signed_guard(k, x0) for k in range(n_tr)])
+    armed = values < -_ARM
+    ts = [t0]
+    interpolants = []
+    while True:
+        message = solver.step()
+        if solver.status == "failed":
+            return OdeSolution(ts + [ts[-1]], interpolants or [None]), None, None, "failed"
+        t_old, t_new = solver.t_old, solver.t
+        dense = solver.dense_output()
+        new_values = np.array([funcs.signed_guard(k, solver.y) for k in range(n_tr)])
+        best = None
+        for k in range(n_tr):
+            if armed[k] and values[k] < 0 <= new_values[k]:
+                t_hit = brentq(
+                    lambda tt, k=k: funcs.signed_guard(k, dense(tt)), t_old, t_new,
+                    xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200,
+                )
+                x_hit = dense(t_hit)
+                if not funcs.admissible(k, x_hit):
+                    continue
+                if best is None or t_hit < best[0]:
+                    best = (t_hit, k, x_hit)
+        armed |= new_values < -_ARM
+        values = new_values
+        interpolants.append(dense)
+        if best is not None:
+            ts.append(best[0])
+            return OdeSolution(ts, interpolants), best[1], best[2], None
+        ts.append(t_new)
+        if solver.status == "finished":
+            del message
+            return OdeSolution(ts, interpolants), None, None, "timeout"
