@@ -198,6 +198,8 @@ class HybridModel:
     reference: ClassVar[str] = ""
     inputs: ClassVar[tuple[str, ...]] = ()
     input_units: ClassVar[tuple[str, ...]] = ()
+    #: Default shooting mesh (segments per phase, RK steps per segment); refined automatically.
+    mesh: ClassVar[tuple[int, int]] = (4, 3)
     _cache: ClassVar[dict[type, _Structure]] = {}
 
     def __post_init__(self) -> None:

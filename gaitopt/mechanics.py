@@ -54,16 +54,41 @@ def potential_energy(masses: Sequence[PointMass], gravity: ca.SX) -> ca.SX:
 def lagrange_acceleration(
     masses: Sequence[PointMass], q: ca.SX, qd: ca.SX, gravity: ca.SX, tau: ca.SX | float = 0
 ) -> ca.SX:
-    """Solve Lagrange's equations for ``q̈``.
+    """Solve Lagrange's equations of a system of point masses for ``q̈``.
 
-    ``M(q) q̈ = τ − (∂(M q̇)/∂q) q̇ + ∂T/∂q − ∂V/∂q`` with ``M = ∂²T/∂q̇²``.
+    For point masses ``d/dt ∂L/∂q̇ − ∂L/∂q = τ`` is ``Σ m_i J_iᵀ (J_i q̈ + J̇_i q̇ + g e_y) = τ``
+    with ``J_i = ∂r_i/∂q`` (project each mass's Newton equation on the coordinates), i.e.
+    ``M q̈ = τ − Σ m_i J_iᵀ (J̇_i q̇ + g e_y)`` with ``M = Σ m_i J_iᵀ J_i``.  This form gives far
+    smaller expressions than differentiating ``T`` twice.
     """
-    T = kinetic_energy(masses, q, qd)
-    V = potential_energy(masses, gravity)
-    M = ca.hessian(T, qd)[0]
-    p = ca.gradient(T, qd)  # generalised momentum M q̇
-    rhs = tau - ca.jtimes(p, q, qd) + ca.gradient(T, q) - ca.gradient(V, q)
-    return ca.solve(M, rhs)
+    M = 0
+    rhs = tau
+    for m, r in masses:
+        J = ca.jacobian(r, q)
+        v = J @ qd
+        bias = ca.jtimes(v, q, qd) + ca.vertcat(0, gravity)  # J̇ q̇ + g e_y
+        M = M + m * (J.T @ J)
+        rhs = rhs - m * (J.T @ bias)
+    return ca.cse(solve_small(M, rhs))
+
+
+def solve_small(A: ca.SX, b: ca.SX) -> ca.SX:
+    """``A⁻¹ b`` for a small symbolic matrix, by Cramer's rule up to 3×3 (far fewer operations
+    in the shooting integrator than a symbolic QR); ``casadi.solve`` beyond."""
+    n = A.shape[0]
+    if n == 1:
+        return b / A
+    if n == 2:
+        det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
+        return ca.vertcat(A[1, 1] * b[0] - A[0, 1] * b[1], A[0, 0] * b[1] - A[1, 0] * b[0]) / det
+    if n == 3:
+        det = ca.det(A)
+        cols = []
+        for k in range(3):
+            Ak = ca.horzcat(*[b if j == k else A[:, j] for j in range(3)])
+            cols.append(ca.det(Ak))
+        return ca.vertcat(*cols) / det
+    return ca.solve(A, b)
 
 
 def impact_velocity(

@@ -81,8 +81,13 @@ class LimitCycle:
         The per-step input the orbit was computed with.
     orbit : list of OrbitArc
         Dense samples of each phase of the orbit.
+    discretisation : MultipleShooting or None
+        The mesh of the accepted solution.
+    discretisation_error : float
+        Estimated error of the unknowns due to the fixed-step integration: the size of one Newton
+        correction towards a mesh with twice as many RK steps.
     iterations : int
-        Newton (or IPOPT) iterations.
+        Newton (or IPOPT) iterations (of the final mesh).
     solve_time : float
         Wall-clock seconds spent in :func:`find_limit_cycle`.
     """
@@ -105,6 +110,8 @@ class LimitCycle:
     input_jacobian: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     inputs: np.ndarray = field(default_factory=lambda: np.zeros(0))
     orbit: list[OrbitArc] = field(default_factory=list)
+    discretisation: Any = None
+    discretisation_error: float = float("nan")
     iterations: int = 0
     solve_time: float = float("nan")
 
@@ -137,6 +144,7 @@ class LimitCycle:
             "inputs": dict(zip(self.model.inputs, map(float, self.inputs))),
             "durations": [float(d) for d in self.durations],
             "verification_error": _num(self.verification_error),
+            "discretisation_error": _num(self.discretisation_error),
             "iterations": int(self.iterations),
             "solve_time": _num(self.solve_time),
         }

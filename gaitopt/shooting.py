@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any
 
@@ -133,17 +133,33 @@ class Transcription:
         F = ca.vertcat(G, P - s)  # periodicity closes the cycle
         assert F.shape[0] == self.size, "shooting system must be square"
 
-        self.residual = ca.Function("residual", [w, u, p], [F], ["w", "u", "p"], ["F"])
+        # Expanded to SX: the small dense graphs evaluate several times faster than MX.
+        self.residual = ca.Function("residual", [w, u, p], [F], ["w", "u", "p"], ["F"]).expand()
+        newton = {"error_on_fail": False, "abstol": 1e-12, "abstolStep": 1e-15, "max_iter": 30}
+        # Plain Newton first (quadratic from a simulated guess); with line search as a fallback.
         self.newton = ca.rootfinder(
-            "limit_cycle", "newton", self.residual,
-            {"error_on_fail": False, "abstol": 1e-13, "abstolStep": 1e-15, "max_iter": 40},
+            "limit_cycle", "newton", self.residual, {**newton, "line_search": False}
+        )
+        self.newton_line_search = ca.rootfinder(
+            "limit_cycle_ls", "newton", self.residual, {**newton, "max_iter": 100}
         )
         GP = ca.vertcat(G, P)
         self.linearisation = ca.Function(
             "linearisation", [w, u, p],
             [ca.jacobian(GP, w), ca.jacobian(GP, u), F, x_return],
             ["w", "u", "p"], ["J_w", "J_u", "F", "x_return"],
-        )
+        ).expand()
+        K = S * disc.dense + 1  # dense samples per phase (segment starts shared)
+        self.guard_maps = [
+            [
+                (
+                    tr_.guard.map(K),
+                    tr_.admissible.map(K) if tr_.admissible is not None else None,
+                )
+                for tr_ in ph.transitions
+            ]
+            for ph in self.phases
+        ]
         self.checks = ca.Function(
             "checks", [w, u, p],
             [ca.horzcat(*ends), ca.vertcat(*dg), ca.vertcat(*adm), ca.vertcat(*durations)],
@@ -201,7 +217,7 @@ def find_limit_cycle(
     *,
     steps: int = 1,
     inputs: Any = None,
-    discretisation: MultipleShooting = MultipleShooting(),
+    discretisation: MultipleShooting | None = None,
     method: str = "newton",
     verify: bool = True,
     tol: float = 1e-10,
@@ -220,16 +236,20 @@ def find_limit_cycle(
         Returns to the section per orbit (``2`` for a period-2 gait).
     inputs : array_like, optional
         Constant per-step input (``model.inputs``); default passive.
-    discretisation : MultipleShooting
-        Segments per phase and RK steps per segment.
+    discretisation : MultipleShooting, optional
+        Segments per phase and RK steps per segment to start from (default: the model's
+        ``mesh``).  After convergence the discretisation error is estimated by one Newton
+        correction towards twice as many RK steps; while it exceeds ``tol`` the steps are doubled
+        and the orbit re-solved (at most four times).
     method : {"newton", "ipopt"}
         CasADi Newton rootfinder on the square system, or IPOPT (``nlpsol``) with durations
         bounded positive.
     verify : bool
         Check the orbit by independent simulation (:func:`gaitopt.simulate`).
     tol : float
-        Largest accepted residual of the shooting equations and, scaled by 1e3, the largest
-        accepted difference between the simulated return and the fixed point.
+        Largest accepted residual of the shooting equations, target of the discretisation-error
+        estimate and, scaled by 1e3, the largest accepted difference between the simulated return
+        and the fixed point (the simulation runs at ``rtol = 1e-11``).
 
     Returns
     -------
@@ -255,7 +275,8 @@ def find_limit_cycle(
         raise GaitoptInputError(
             f"`inputs` must have {len(model.inputs)} entries ({', '.join(model.inputs) or 'none'})"
         )
-    tr = transcription(type(model), discretisation, steps)
+    disc = discretisation or MultipleShooting(*type(model).mesh)
+    tr = transcription(type(model), disc, steps)
     p = model.p
 
     def fail(message: str, **extra: Any) -> LimitCycle:
@@ -271,7 +292,10 @@ def find_limit_cycle(
         s0 = guess.section_point
     else:
         s0 = model.section_vector(guess if guess is not None else {})
-    sim = simulate(model, model.lift(s0), steps=steps, inputs=u, max_phase_time=_time_limit(model))
+    sim = simulate(
+        model, model.lift(s0), steps=steps, inputs=u, max_phase_time=_time_limit(model),
+        rtol=1e-8, atol=1e-9,  # a guess: Newton does the rest
+    )
     if not sim.success:
         where = ", ".join(f"{k}={v:.6g}" for k, v in zip(model.section.coordinates, s0))
         if explicit and not isinstance(guess, LimitCycle):
@@ -283,20 +307,21 @@ def find_limit_cycle(
                     f"{steps} step(s) ({sim.message}); the gait may not exist at these parameters")
     w0 = tr.pack(s0, *_nodes_from_simulation(sim, tr))
 
-    # -- solve ------------------------------------------------------------------------------------
-    if method == "newton":
-        w = np.asarray(tr.newton(w0, u, p), dtype=float).ravel()
-        stats = tr.newton.stats()
-        converged, iterations = bool(stats["success"]), int(stats["iter_count"])
-    else:
-        lbx = np.full(tr.size, -np.inf)
-        lbx[tr.duration_index()] = 1e-9
-        sol = tr.ipopt()(x0=w0, p=np.concatenate([u, p]), lbg=0, ubg=0, lbx=lbx)
-        stats = tr.ipopt().stats()
-        w = np.asarray(sol["x"], dtype=float).ravel()
-        converged, iterations = bool(stats["success"]), int(stats["iter_count"])
+    # -- solve, then refine the mesh until the discretisation error is below tol ---------------
+    refinements, disc_error = 0, float("nan")
+    while True:
+        w, converged, iterations = _solve(tr, method, w0, u, p)
+        J_w, J_u, F, x_return = (np.asarray(v, dtype=float) for v in tr.linearisation(w, u, p))
+        if not converged:
+            break
+        fine = transcription(type(model), replace(disc, steps=2 * disc.steps), steps)
+        correction = _newton_step(tr, J_w, fine.residual(w, u, p))
+        disc_error = float(np.max(np.abs(correction)))
+        if disc_error <= tol or refinements == _MAX_REFINEMENTS:
+            break
+        disc, tr, w0 = fine.disc, fine, w + correction
+        refinements += 1
 
-    J_w, J_u, F, x_return = (np.asarray(v, dtype=float) for v in tr.linearisation(w, u, p))
     residual = float(np.max(np.abs(F))) if np.all(np.isfinite(F)) else float("inf")
     ends, dg, adm, durations = (np.asarray(v, dtype=float) for v in tr.checks(w, u, p))
     durations = durations.ravel()
@@ -304,6 +329,7 @@ def find_limit_cycle(
     x_star = model.lift(s_star)
     common = dict(
         residual=residual, iterations=iterations, durations=durations,
+        discretisation=disc, discretisation_error=disc_error,
         period=float(np.sum(durations)),
         fixed_point=dict(zip(model.state_names, map(float, x_star))),
     )
@@ -333,8 +359,12 @@ def find_limit_cycle(
     if verify:
         verified, error, vmessage = _verify(model, x_star, durations, steps, u, tol * 1e3)
     success = verified or not verify
+    accuracy = (
+        f"discretisation error {disc_error:.1g}"
+        + (f" (above tol {tol:g} after {refinements} refinements)" if disc_error > tol else "")
+    )
     message = (
-        f"periodic orbit found (residual {residual:.2g}); " + vmessage
+        f"periodic orbit found (residual {residual:.2g}, {accuracy}); " + vmessage
         if success
         else "the shooting solution is not confirmed: " + vmessage
     )
@@ -356,6 +386,38 @@ def find_limit_cycle(
         solve_time=time.perf_counter() - start,
         **common,
     )
+
+
+_MAX_REFINEMENTS = 4
+
+
+def _solve(tr: Transcription, method: str, w0, u, p) -> tuple[np.ndarray, bool, int]:
+    """Newton (plain, then with line search), or IPOPT with positive durations."""
+    if method == "newton":
+        w, converged, iterations = _newton(tr.newton, w0, u, p)
+        if not converged:
+            w, converged, more = _newton(tr.newton_line_search, w0, u, p)
+            iterations += more
+        return w, converged, iterations
+    lbx = np.full(tr.size, -np.inf)
+    lbx[tr.duration_index()] = 1e-9
+    solver = tr.ipopt()
+    sol = solver(x0=w0, p=np.concatenate([u, p]), lbg=0, ubg=0, lbx=lbx)
+    stats = solver.stats()
+    return np.asarray(sol["x"], dtype=float).ravel(), bool(stats["success"]), int(stats["iter_count"])
+
+
+def _newton_step(tr: Transcription, J_w: np.ndarray, F) -> np.ndarray:
+    """``−J_F⁻¹ F`` with ``J_F = ∂[G; P − s]/∂w`` from the Jacobian of ``[G; P]``."""
+    J_F = J_w.copy()
+    J_F[tr.n_g :, : tr.m] -= np.eye(tr.m)
+    return -np.linalg.solve(J_F, np.asarray(F, dtype=float).ravel())
+
+
+def _newton(solver: ca.Function, w0, u, p) -> tuple[np.ndarray, bool, int]:
+    w = np.asarray(solver(w0, u, p), dtype=float).ravel()
+    stats = solver.stats()
+    return w, bool(stats["success"]) and bool(np.all(np.isfinite(w))), int(stats["iter_count"])
 
 
 def _time_limit(model: HybridModel) -> float:
@@ -435,12 +497,11 @@ def _check_dense(model, tr, orbit, u, p) -> str | None:
         phase = model.phases[arc.phase]
         K = arc.x.shape[1]
         for j, transition in enumerate(phase.transitions):
-            g = transition.direction * np.asarray(
-                transition.guard.map(K)(arc.x, u, p), dtype=float
-            ).ravel()
+            guard_map, admissible_map = tr.guard_maps[arc.phase][j]
+            g = transition.direction * np.asarray(guard_map(arc.x, u, p), dtype=float).ravel()
             a = (
-                np.asarray(transition.admissible.map(K)(arc.x, u, p), dtype=float).ravel()
-                if transition.admissible is not None
+                np.asarray(admissible_map(arc.x, u, p), dtype=float).ravel()
+                if admissible_map is not None
                 else np.ones(K)
             )
             scale = 1e-9 * (1 + np.max(np.abs(g)))

@@ -21,6 +21,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
+import casadi as ca
 import numpy as np
 from scipy.integrate import DOP853, LSODA, RK45, OdeSolution, Radau
 from scipy.optimize import brentq
@@ -125,30 +126,54 @@ class Simulation:
         return max(len(self.section_times) - 1, 0)
 
 
+class _Buffered:
+    """A CasADi function evaluated through preallocated buffers (``Function.buffer``): about
+    50× less call overhead than ``f(x, u, p)``, which dominates small right-hand sides."""
+
+    def __init__(self, f: ca.Function, u: np.ndarray, p: np.ndarray):
+        self._x = np.zeros(f.size1_in(0))
+        self._u = np.ascontiguousarray(u, dtype=float)
+        self._p = np.ascontiguousarray(p, dtype=float)
+        self._out = np.zeros(f.numel_out(0))
+        self._buffer, self._trigger = f.buffer()
+        for i, a in enumerate((self._x, self._u, self._p)):
+            self._buffer.set_arg(i, memoryview(a))
+        self._buffer.set_res(0, memoryview(self._out))
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        self._x[:] = x
+        self._trigger()
+        return self._out.copy()
+
+
 class _PhaseFunctions:
     """Numerical callables of one phase, for fixed ``u`` and ``p``."""
 
     def __init__(self, phase: Phase, u: np.ndarray, p: np.ndarray):
         self.phase = phase
         self.u, self.p = u, p
-        self._flow = phase.flow
+        self._flow = _Buffered(phase.flow, u, p)
+        self._guards = [_Buffered(tr.guard, u, p) for tr in phase.transitions]
+        self._admissible = [
+            _Buffered(tr.admissible, u, p) if tr.admissible is not None else None
+            for tr in phase.transitions
+        ]
         self._jac = None
 
     def rhs(self, t: float, x: np.ndarray) -> np.ndarray:
-        return np.asarray(self._flow(x, self.u, self.p)).ravel()
+        return self._flow(x)
 
     def jac(self, t: float, x: np.ndarray) -> np.ndarray:
         if self._jac is None:
-            self._jac = self._flow.factory("jac", ["x", "u", "p"], ["jac:flow:x"])
+            self._jac = self.phase.flow.factory("jac", ["x", "u", "p"], ["jac:flow:x"])
         return np.asarray(self._jac(x, self.u, self.p))
 
     def signed_guard(self, k: int, x: np.ndarray) -> float:
-        tr = self.phase.transitions[k]
-        return tr.direction * float(tr.guard(x, self.u, self.p))
+        return self.phase.transitions[k].direction * float(self._guards[k](x)[0])
 
     def admissible(self, k: int, x: np.ndarray) -> bool:
-        tr = self.phase.transitions[k]
-        return tr.admissible is None or float(tr.admissible(x, self.u, self.p)) > 0
+        a = self._admissible[k]
+        return a is None or float(a(x)[0]) > 0
 
 
 def simulate(

@@ -27,6 +27,7 @@ class VanDerPol(HybridModel):
     name = "vanderpol"
     title = "Van der Pol oscillator"
     reference = "van der Pol 1926; Hairer, Nørsett & Wanner, Solving ODEs I"
+    mesh = (8, 8)  # a long period (6.66 at μ = 1) with fast relaxation for large μ
 
     mu: float = parameter(
         1.0,

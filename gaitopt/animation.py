@@ -1,0 +1,229 @@
+"""Animated GIFs of walkers stepping down their slope, from a simulation.
+
+The drawing is generic: each phase's ``points(x, p)`` function gives named world-frame points
+relative to the current contact point, drawn as one polyline (legs) with a dot on the body mass
+(the point named ``hip``, ``hub``, ``mass``, ``body`` or ``com``).  At each transition with a
+``foothold`` the contact point moves to that point's world position at the event, so successive
+steps walk on.  Models with a shape the polyline does not show (the rimless wheel's spokes) have
+a drawing helper in :data:`_OUTLINES`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.animation import FuncAnimation, PillowWriter
+
+from .errors import GaitoptInputError
+from .hybrid import HybridModel, Phase
+from .plotting import temporary_path
+from .simulation import Simulation
+
+__all__ = ["animate_walker", "walker_frames"]
+
+_MASS_POINTS = ("hip", "hub", "mass", "body", "com")
+
+
+def _rimless_outline(
+    model: HybridModel, phase: Phase, x: np.ndarray, pts: np.ndarray
+) -> np.ndarray:
+    """Every spoke of the rimless wheel from the hub: spoke k at angle θ − 2αk (NaN-separated)."""
+    hub = pts[:, phase.point_names.index("hub")]
+    theta = x[phase.states.index("theta")]
+    alpha = math.pi / model.spokes
+    segments = []
+    for k in range(int(model.spokes)):
+        angle = theta - 2 * alpha * k
+        foot = hub - model.length * np.array([math.sin(angle), math.cos(angle)])
+        segments += [hub, foot, [np.nan, np.nan]]
+    return np.array(segments).T
+
+
+# Model-specific outlines (model name -> outline(model, phase, x, points) -> 2×M, NaN breaks);
+# every other model is drawn as the polyline through its points in declared order.
+_OUTLINES: dict[str, Callable[..., np.ndarray]] = {"rimless_wheel": _rimless_outline}
+
+
+def _check_drawable(model: HybridModel, simulation: Simulation) -> None:
+    if not simulation.arcs:
+        raise GaitoptInputError("`simulation` has no arcs; simulate at least one step")
+    for arc in simulation.arcs:
+        phase = model.phases[arc.phase]
+        if phase.points is None:
+            raise GaitoptInputError(
+                f"{model.name}: phase {phase.name!r} has no drawing points (Phase.points is "
+                "None); only models with a geometry can be animated"
+            )
+
+
+def _contact_offsets(model: HybridModel, simulation: Simulation) -> list[np.ndarray]:
+    """World position of the contact point during each arc (the first contact at the origin)."""
+    offsets = [np.zeros(2)]
+    p = model.p
+    for k in range(len(simulation.arcs) - 1):
+        offset = offsets[-1]
+        if k < len(simulation.events):
+            event = simulation.events[k]
+            phase = model.phases[event.phase]
+            tr = next((t for t in phase.transitions if t.name == event.transition), None)
+            if tr is not None and tr.foothold is not None:
+                pts = np.asarray(phase.points(event.state_before, p), dtype=float)
+                offset = offset + pts[:, phase.point_names.index(tr.foothold)]
+        offsets.append(offset)
+    return offsets
+
+
+def walker_frames(
+    model: HybridModel, simulation: Simulation, times: np.ndarray
+) -> list[dict[str, np.ndarray]]:
+    """World-frame drawing data of ``model`` at ``times`` along ``simulation``.
+
+    Parameters
+    ----------
+    model : HybridModel
+        The simulated model (its phases must have ``points``).
+    simulation : Simulation
+        A simulation of ``model`` (:func:`gaitopt.simulate`).
+    times : numpy.ndarray
+        Times (model time unit), within the simulated span.
+
+    Returns
+    -------
+    list of dict
+        Per time: ``"outline"`` (2×M, m, NaN-separated polyline of the body), ``"mass"`` (2×1 or
+        2×0, the body mass point) and ``"contact"`` (2, the current contact point).
+    """
+    _check_drawable(model, simulation)
+    arcs = simulation.arcs
+    offsets = _contact_offsets(model, simulation)
+    ends = np.array([arc.t1 for arc in arcs])
+    outline_of = _OUTLINES.get(model.name)
+    p = model.p
+    frames = []
+    for t in np.asarray(times, dtype=float):
+        k = min(int(np.searchsorted(ends, t, side="left")), len(arcs) - 1)
+        arc = arcs[k]
+        phase = model.phases[arc.phase]
+        x = np.asarray(arc.solution(min(max(t, arc.t0), arc.t1)), dtype=float).ravel()
+        pts = np.asarray(phase.points(x, p), dtype=float)
+        outline = outline_of(model, phase, x, pts) if outline_of else pts
+        mass = [n for n in _MASS_POINTS if n in phase.point_names]
+        mass_xy = pts[:, [phase.point_names.index(mass[0])]] if mass else np.zeros((2, 0))
+        frames.append(
+            {
+                "outline": outline + offsets[k][:, None],
+                "mass": mass_xy + offsets[k][:, None],
+                "contact": offsets[k],
+            }
+        )
+    return frames
+
+
+def animate_walker(
+    model: HybridModel,
+    simulation: Simulation,
+    path: str | os.PathLike,
+    fps: int = 30,
+    *,
+    max_frames: int = 120,
+    dpi: int = 70,
+) -> Path:
+    """Write a GIF of the walker moving down its slope over the simulated steps.
+
+    Frames are taken at real-time instants ``t₀ + k/fps`` (the model's time unit counted as
+    seconds; dimensionless for Garcia's simplest walker), so the GIF plays in real time.  If that
+    needs more than ``max_frames`` frames the frames are spread evenly over the motion instead and
+    the title says how much faster than real time it plays.  The view is fixed and wide enough for
+    the whole motion; the ground is the line ``y = −x·tan(slope)`` through the first contact.
+
+    Parameters
+    ----------
+    model : HybridModel
+        The simulated model; every phase it passes through must have drawing ``points``.
+    simulation : Simulation
+        From :func:`gaitopt.simulate` (a few steps: 3–4 keep the GIF small).
+    path : str or os.PathLike
+        Output GIF; written whole or not at all (temporary file, then :func:`os.replace`).
+    fps : int
+        Frames per second of playback.
+    max_frames : int
+        Upper bound on the number of frames.
+    dpi : int
+        Resolution (the figure is 6 × 3.2 inches: 420 × 224 pixels at 70 dpi).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    GaitoptInputError
+        If a phase has no drawing points (Van der Pol), the simulation is empty, or ``fps`` or
+        ``max_frames`` is not a positive integer (``max_frames`` ≥ 2).
+    """
+    if int(fps) != fps or fps < 1:
+        raise GaitoptInputError(f"`fps` must be a positive integer, got {fps!r}")
+    if int(max_frames) != max_frames or max_frames < 2:
+        raise GaitoptInputError(f"`max_frames` must be an integer ≥ 2, got {max_frames!r}")
+    _check_drawable(model, simulation)
+    path = Path(path)
+    t0, t1 = simulation.arcs[0].t0, simulation.arcs[-1].t1
+    real_time = t0 + np.arange(int(math.floor((t1 - t0) * fps)) + 1) / fps
+    if len(real_time) <= max_frames:
+        times, speed = real_time, 1.0
+    else:
+        times = np.linspace(t0, t1, int(max_frames))
+        speed = (times[1] - times[0]) * fps
+    frames = walker_frames(model, simulation, times)
+
+    # A fixed view around everything drawn.
+    allxy = np.hstack([f["outline"] for f in frames] + [f["mass"] for f in frames])
+    xmin, xmax = np.nanmin(allxy[0]), np.nanmax(allxy[0])
+    ymin, ymax = np.nanmin(allxy[1]), np.nanmax(allxy[1])
+    pad = 0.12 * max(xmax - xmin, ymax - ymin)
+    xmin, xmax, ymin, ymax = xmin - pad, xmax + pad, ymin - pad, ymax + pad
+    slope = float(getattr(model, "slope", 0.0))
+
+    fig, ax = plt.subplots(figsize=(6.0, 3.2), layout="constrained")
+    ground_x = np.array([xmin - 1.0, xmax + 1.0])
+    ground_y = -ground_x * math.tan(slope)
+    ax.fill_between(ground_x, ground_y, ymin - 10.0, color="0.85", zorder=0)
+    ax.plot(ground_x, ground_y, color="0.3", lw=1.2, zorder=1)
+    (body,) = ax.plot([], [], color="C0", lw=3, solid_capstyle="round", zorder=3)
+    (mass,) = ax.plot([], [], "o", color="C3", ms=9, zorder=4)
+    (steps,) = ax.plot([], [], "^", color="k", ms=4, zorder=2)
+    clock = ax.text(0.02, 0.95, "", transform=ax.transAxes, va="top", fontsize=9)
+    ax.set_xlim(xmin, xmax)
+    ax.set_ylim(ymin, ymax)
+    ax.set_aspect("equal")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    pace = "real time" if speed == 1.0 else f"played {speed:.3g}× faster than real time"
+    ax.set_title(f"{model.title or model.name} (slope {slope:.4g} rad) — {pace}", fontsize=9)
+
+    def draw(k: int):
+        frame = frames[k]
+        body.set_data(frame["outline"][0], frame["outline"][1])
+        mass.set_data(frame["mass"][0], frame["mass"][1])
+        contacts = np.unique(np.array([f["contact"] for f in frames[: k + 1]]), axis=0)
+        steps.set_data(contacts[:, 0], contacts[:, 1])
+        clock.set_text(f"t = {times[k]:.2f}")
+        return body, mass, steps, clock
+
+    animation = FuncAnimation(fig, draw, frames=len(frames), blit=False)
+    tmp = temporary_path(path, ".gif")  # Pillow picks the format from the suffix
+    try:
+        animation.save(tmp, writer=PillowWriter(fps=int(fps)), dpi=dpi)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    finally:
+        plt.close(fig)
+    return path

@@ -1,0 +1,562 @@
+"""The ``gaitopt`` command: list the models, find a gait, simulate a model.
+
+::
+
+    gaitopt list [--json]
+    gaitopt solve MODEL [--set NAME=VALUE ...] [--guess STATE=VALUE ...] [--steps K]
+                        [--method newton|ipopt] [--json]
+    gaitopt simulate MODEL [--set NAME=VALUE ...] [--x0 STATE=VALUE ...] [--steps N] [--json]
+
+Exit status (DESIGN.md, public contract): 0 gait found / simulation completed; 1 no gait found
+(the JSON is still printed, with ``success: false``) or the simulation did not complete; 2 bad
+input, reported as one line on stderr that starts with ``gaitopt: error:``, names the argument,
+shows the value and suggests a fix.
+
+Each subcommand is an entry of :data:`SUBCOMMANDS`: a function that declares its arguments and a
+function that runs it.  Adding one (``continue``, ``control``) means writing those two functions
+and adding the entry.
+
+The module imports the library's submodules directly (not the package ``gaitopt``), so the
+console script works however the package is installed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import ctypes
+import difflib
+import json
+import math
+import os
+import sys
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, NoReturn
+
+import numpy as np
+
+from .errors import GuessError, ParameterError, StateError
+from .hybrid import HybridModel
+from .models import REGISTRY
+from .parameters import ParameterSpec, check_parameter
+from .result import LimitCycle
+from .shooting import find_limit_cycle
+from .simulation import Simulation, simulate
+
+__all__ = ["main", "build_parser", "Subcommand", "SUBCOMMANDS", "EXIT_OK", "EXIT_NOT_FOUND"]
+
+PROG = "gaitopt"
+EXIT_OK = 0
+EXIT_NOT_FOUND = 1
+EXIT_BAD_INPUT = 2
+
+
+class InputError(Exception):
+    """Bad command-line input; :func:`main` prints it on one line and exits with status 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose usage errors are one line, in the style of every other error."""
+
+    def error(self, message: str) -> NoReturn:
+        """Print ``gaitopt: error: ...`` (one line) and exit with status 2."""
+        where = self.prog.removeprefix(PROG).strip()
+        prefix = f"{where}: " if where else ""
+        self.exit(EXIT_BAD_INPUT, f"{PROG}: error: {prefix}{message}; see `{self.prog} --help`\n")
+
+
+@dataclass(frozen=True)
+class Subcommand:
+    """One subcommand of ``gaitopt``.
+
+    Attributes
+    ----------
+    help : str
+        One-line description (shown by ``gaitopt --help``).
+    add_arguments : callable
+        ``add_arguments(parser)`` declares the subcommand's arguments.
+    run : callable
+        ``run(args) -> exit status``; raises :class:`InputError` for bad input.
+    """
+
+    help: str
+    add_arguments: Callable[[argparse.ArgumentParser], None]
+    run: Callable[[argparse.Namespace], int]
+
+
+# -- small parsers -------------------------------------------------------------------------------
+def _count(minimum: int) -> Callable[[str], int]:
+    """An argparse ``type`` accepting integers ``>= minimum``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = minimum - 1
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {text!r}")
+        return value
+
+    return parse
+
+
+def _suggestion(word: str, choices: Iterable[str]) -> str:
+    """``"did you mean 'x'? "`` for the choice closest to ``word``, or ``""``.
+
+    A whole name is compared first; then its ``_``-separated parts, so that ``walkr`` finds
+    ``simplest_walker``.
+    """
+    choices = list(choices)
+    close = difflib.get_close_matches(word, choices, n=1)
+    if not close:
+        parts = {part: choice for choice in choices for part in choice.split("_")}
+        close = [parts[p] for p in difflib.get_close_matches(word, parts, n=1, cutoff=0.75)]
+    return f"did you mean {close[0]!r}? " if close else ""
+
+
+def _split(option: str, item: str, examples: Mapping[str, str]) -> tuple[str, str]:
+    """Split ``NAME=VALUE``; ``examples`` maps names to a valid ``NAME=VALUE`` for the hint."""
+    name, sep, text = (part.strip() for part in item.partition("="))
+    if not sep or not name or not text:
+        example = examples.get(name) or next(iter(examples.values()), "NAME=VALUE")
+        raise InputError(f"{option} {item}: expected NAME=VALUE, e.g. {option} {example}")
+    return name, text
+
+
+def _number(option: str, item: str, text: str, example: str) -> float:
+    """A finite float from ``text`` (``0.09``, ``1e-2``), or an :class:`InputError`."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise InputError(
+            f"{option} {item}: {text!r} is not a number; e.g. {option} {example}"
+        ) from None
+    if not math.isfinite(value):
+        raise InputError(f"{option} {item}: {text!r} is not finite; e.g. {option} {example}")
+    return value
+
+
+def _assignments(
+    option: str, items: Sequence[str] | None, examples: Mapping[str, str]
+) -> dict[str, tuple[str, float]]:
+    """Parse repeated ``NAME=VALUE`` items into ``name -> (item, value)`` (the last one wins)."""
+    parsed: dict[str, tuple[str, float]] = {}
+    for item in items or ():
+        name, text = _split(option, item, examples)
+        example = examples.get(name) or next(iter(examples.values()), "NAME=VALUE")
+        parsed[name] = (item, _number(option, item, text, example))
+    return parsed
+
+
+def _echo(option: str, items: Iterable[str]) -> str:
+    """The arguments as typed: ``--set a=1 --set b=2``."""
+    return " ".join(f"{option} {item}" for item in items)
+
+
+# -- models, parameters, states -----------------------------------------------------------------
+def _model_class(name: str) -> type[HybridModel]:
+    """The registered model class called ``name``."""
+    if name in REGISTRY:
+        return REGISTRY[name]
+    raise InputError(
+        f"MODEL {name!r} is not a model; {_suggestion(name, REGISTRY)}"
+        f"available: {', '.join(REGISTRY)} (see `{PROG} list`)"
+    )
+
+
+def _parameter(model_name: str, specs: Mapping[str, ParameterSpec], item: str) -> tuple[str, float]:
+    """One ``--set NAME=VALUE``: a known parameter, a number, in its range."""
+    examples = {name: f"{name}={spec.default:g}" for name, spec in specs.items()}
+    name, text = _split("--set", item, examples)
+    if name not in specs:
+        raise InputError(
+            f"--set {item}: {model_name} has no parameter {name!r}; "
+            f"{_suggestion(name, specs)}parameters: {', '.join(specs)} (see `{PROG} list`)"
+        )
+    value = _number("--set", item, text, examples[name])
+    try:
+        return name, check_parameter(model_name, specs[name], value)
+    except ParameterError as exc:
+        raise InputError(f"--set {item}: {exc}") from None
+
+
+def build_model(name: str, settings: Sequence[str] | None) -> HybridModel:
+    """The model ``name`` with the ``--set NAME=VALUE`` items applied.
+
+    Raises
+    ------
+    InputError
+        For an unknown model or parameter, a value that is not a number or out of range, or a
+        combination of values the model rejects.
+    """
+    cls = _model_class(name)
+    specs = {spec.name: spec for spec in cls.parameter_specs()}
+    params = dict(_parameter(name, specs, item) for item in settings or ())
+    try:
+        return cls(**params)
+    except ParameterError as exc:  # cross-parameter checks (rimless wheel: slope < π/spokes)
+        raise InputError(f"{_echo('--set', settings or ())}: {exc}") from None
+
+
+def _state_examples(model: HybridModel) -> dict[str, str]:
+    """``name -> "name=value"`` from the model's default start (section coordinates)."""
+    return {name: f"{name}={value:.6g}" for name, value in model.default_start().items()}
+
+
+def _guess_hint(model: HybridModel, name: str) -> str:
+    """What to do about a ``--guess`` name that is not a section coordinate."""
+    if name in model.state_names:  # fixed by the section: say which names are free
+        return f"; --guess takes the section coordinates {', '.join(model.section.coordinates)}"
+    close = _suggestion(name, model.section.coordinates).strip()
+    return f"; {close}" if close else ""  # the library's message already lists the coordinates
+
+
+def parse_guess(model: HybridModel, items: Sequence[str] | None) -> dict[str, float] | None:
+    """The ``--guess STATE=VALUE`` items as section coordinates (``None`` if there are none)."""
+    if not items:
+        return None
+    parsed = _assignments("--guess", items, _state_examples(model))
+    guess = {name: value for name, (_, value) in parsed.items()}
+    coordinates = model.section.coordinates
+    try:
+        model.section_vector(guess)
+    except StateError as exc:  # the library names the first state that is not a coordinate
+        name, item = next(
+            ((n, item) for n, (item, _) in parsed.items() if n not in coordinates),
+            ("", " ".join(items)),
+        )
+        raise InputError(f"--guess {item}: {exc}{_guess_hint(model, name)}") from None
+    return guess
+
+
+def parse_x0(model: HybridModel, items: Sequence[str] | None) -> np.ndarray:
+    """The ``--x0 STATE=VALUE`` items as a full phase-0 state.
+
+    Only section coordinates: the others follow from the section (missing coordinates from the
+    model's default start).  Any other state named: every state must be given.
+    """
+    parsed = _assignments("--x0", items, _state_examples(model))
+    coordinates, states = model.section.coordinates, model.state_names
+    takes = (
+        f"the section coordinates {', '.join(coordinates)} (the rest follow from the section) "
+        f"or all of {', '.join(states)}"
+    )
+    for name, (item, _) in parsed.items():
+        if name not in states:
+            raise InputError(
+                f"--x0 {item}: {model.name} has no state {name!r}; "
+                f"{_suggestion(name, states)}--x0 takes {takes}"
+            )
+    x0 = {name: value for name, (_, value) in parsed.items()}
+    try:
+        if set(x0) <= set(coordinates):
+            return model.lift(x0)
+        return model.state_vector(x0)
+    except StateError as exc:
+        raise InputError(f"{_echo('--x0', items or ())}: {exc}; --x0 takes {takes}") from None
+
+
+# -- output --------------------------------------------------------------------------------------
+def _jsonable(value: Any) -> Any:
+    """Plain JSON types; non-finite numbers become ``null`` (strict JSON has no NaN)."""
+    if isinstance(value, Mapping):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    if isinstance(value, (complex, np.complexfloating)):
+        return [_jsonable(value.real), _jsonable(value.imag)]
+    return value
+
+
+@contextlib.contextmanager
+def _solver_output_to_stderr() -> Iterator[None]:
+    """Send whatever the solver prints to stderr while the block runs.
+
+    ``solve --json`` promises one JSON object on stdout, but CasADi's solver plugins print
+    (IPOPT's banner), through :data:`sys.stdout` or the C-level file descriptor 1 depending on
+    where the output goes.  Both are pointed at stderr here.
+    """
+    sys.stdout.flush()
+    try:
+        saved = os.dup(1)
+    except OSError:  # no file descriptor 1 to protect
+        saved = None
+    if saved is not None:
+        os.dup2(2, 1)
+    try:
+        with contextlib.redirect_stdout(sys.stderr):
+            yield
+            sys.stdout.flush()
+    finally:
+        if saved is not None:
+            _flush_c_stdio()
+            os.dup2(saved, 1)
+            os.close(saved)
+
+
+def _flush_c_stdio() -> None:
+    """``fflush(NULL)``: push out what C code buffered before file descriptor 1 is restored."""
+    with contextlib.suppress(OSError, AttributeError, TypeError):
+        ctypes.CDLL(None).fflush(None)
+
+
+def _print_json(value: Any) -> None:
+    print(json.dumps(_jsonable(value), indent=2, ensure_ascii=False, allow_nan=False))
+
+
+def _format_params(params: Mapping[str, float]) -> str:
+    return ", ".join(f"{name}={value:g}" for name, value in params.items())
+
+
+def _print_rows(rows: Iterable[tuple[str, Any]]) -> None:
+    for label, value in rows:
+        print(f"{label:<12}{value}")
+
+
+# -- gaitopt list --------------------------------------------------------------------------------
+def describe_model(cls: type[HybridModel]) -> dict[str, Any]:
+    """The ``gaitopt list --json`` entry of a model class."""
+    instance = cls()
+    return {
+        "name": cls.name,
+        "title": cls.title,
+        "reference": cls.reference,
+        "params": [spec.as_dict() for spec in cls.parameter_specs()],
+        "state_names": list(instance.state_names),
+        "section_coordinates": list(instance.section.coordinates),
+        "section": instance.section.doc,
+        "inputs": list(cls.inputs),
+    }
+
+
+def _list_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--json", action="store_true", help="print a JSON list of the models")
+
+
+def run_list(args: argparse.Namespace) -> int:
+    """``gaitopt list``: the models, their parameters, states and sections."""
+    models = [describe_model(cls) for cls in REGISTRY.values()]
+    if args.json:
+        _print_json(models)
+        return EXIT_OK
+    for entry in models:
+        print(f"{entry['name']}: {entry['title']} ({entry['reference']})")
+        for p in entry["params"]:
+            value = f"{p['name']:<12} = {p['default']:<9g} {p['unit']:<6}"
+            print(f"    {value} {p['range']:<20} {p['doc']}")
+        print(f"    states       {', '.join(entry['state_names'])}")
+        print(f"    section      {entry['section']}")
+        print(f"                 coordinates {', '.join(entry['section_coordinates'])}")
+        print(f"    inputs       {', '.join(entry['inputs']) or '(none: passive)'}")
+    return EXIT_OK
+
+
+# -- gaitopt solve -------------------------------------------------------------------------------
+def _model_arguments(parser: argparse.ArgumentParser) -> None:
+    """``MODEL`` and ``--set``, shared by the subcommands that act on one model."""
+    parser.add_argument("model", metavar="MODEL", help=f"model name (see `{PROG} list`)")
+    parser.add_argument(
+        "--set",
+        action="append",
+        metavar="NAME=VALUE",
+        help="change a parameter from its default (repeatable)",
+    )
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def _solve_arguments(parser: argparse.ArgumentParser) -> None:
+    _model_arguments(parser)
+    parser.add_argument(
+        "--guess",
+        action="append",
+        metavar="STATE=VALUE",
+        help="initial guess of a section coordinate (repeatable; others from the default start)",
+    )
+    parser.add_argument(
+        "--steps",
+        type=_count(1),
+        default=1,
+        metavar="K",
+        help="returns to the section per orbit (2: a period-2 gait; default 1)",
+    )
+    parser.add_argument(
+        "--method",
+        choices=("newton", "ipopt"),
+        default="newton",
+        help="Newton rootfinder on the shooting equations (default) or IPOPT",
+    )
+
+
+def _print_cycle(cycle: LimitCycle) -> None:
+    model = cycle.model
+    _print_rows(
+        [
+            ("model", f"{model.name} ({model.title})"),
+            ("params", _format_params(model.params)),
+            ("success", cycle.success),
+            ("message", cycle.message),
+        ]
+    )
+    if not cycle.success:
+        return
+    _print_rows([("period", f"{cycle.period:.10g} ({cycle.steps} step(s) per orbit)")])
+    print(f"fixed point (section: {model.section.doc})")
+    for name, value in cycle.fixed_point.items():
+        print(f"    {name:<12}{value: .10g}")
+    print("multipliers")
+    for z in cycle.multipliers:
+        print(f"    {z.real: .8f} {z.imag:+.8f}j    |λ| = {abs(z):.8f}")
+    _print_rows([("stable", cycle.stable), ("verified", cycle.verified)])
+
+
+def run_solve(args: argparse.Namespace) -> int:
+    """``gaitopt solve``: find a gait by multiple shooting, with its multipliers."""
+    model = build_model(args.model, args.set)
+    guess = parse_guess(model, args.guess)
+    try:
+        with _solver_output_to_stderr():
+            cycle = find_limit_cycle(model, guess, steps=args.steps, method=args.method)
+    except GuessError as exc:
+        raise InputError(f"{_echo('--guess', args.guess or ()) or '--guess'}: {exc}") from None
+    if args.json:
+        _print_json(cycle.as_dict())
+    else:
+        _print_cycle(cycle)
+    return EXIT_OK if cycle.success else EXIT_NOT_FOUND
+
+
+# -- gaitopt simulate ----------------------------------------------------------------------------
+def _simulate_arguments(parser: argparse.ArgumentParser) -> None:
+    _model_arguments(parser)
+    parser.add_argument(
+        "--x0",
+        action="append",
+        metavar="STATE=VALUE",
+        help="start state (repeatable): section coordinates (others from the default start), "
+        "or every state",
+    )
+    parser.add_argument(
+        "--steps",
+        type=_count(1),
+        default=10,
+        metavar="N",
+        help="returns to the section to simulate (default 10)",
+    )
+
+
+def describe_simulation(model: HybridModel, sim: Simulation, requested: int) -> dict[str, Any]:
+    """The ``gaitopt simulate --json`` object."""
+    names = model.state_names
+    return {
+        "model": model.name,
+        "params": model.params,
+        "success": sim.success,
+        "status": sim.status,
+        "message": sim.message,
+        "steps": sim.steps,
+        "requested_steps": requested,
+        "state_names": list(names),
+        "section_coordinates": list(model.section.coordinates),
+        "section": model.section.doc,
+        "returns": [
+            {"t": t, "state": dict(zip(names, row, strict=True))}
+            for t, row in zip(sim.section_times, sim.section_states, strict=True)
+        ],
+        "events": [{"t": event.t, "transition": event.transition} for event in sim.events],
+    }
+
+
+def _print_simulation(report: Mapping[str, Any]) -> None:
+    _print_rows(
+        [
+            ("model", report["model"]),
+            ("params", _format_params(report["params"])),
+            ("status", f"{report['status']}: {report['message']}"),
+        ]
+    )
+    names = report["state_names"]
+    print(f"returns to the section ({report['section']})")
+    print(f"    {'t':>12}" + "".join(f"{name:>14}" for name in names))
+    for entry in report["returns"]:
+        values = "".join(f"{entry['state'][name]:14.8f}" for name in names)
+        print(f"    {entry['t']:12.6f}{values}")
+
+
+def run_simulate(args: argparse.Namespace) -> int:
+    """``gaitopt simulate``: simulate the hybrid model and report each return to the section."""
+    model = build_model(args.model, args.set)
+    x0 = parse_x0(model, args.x0)
+    sim = simulate(model, x0, steps=args.steps)
+    report = describe_simulation(model, sim, args.steps)
+    if args.json:
+        _print_json(report)
+    else:
+        _print_simulation(report)
+    return EXIT_OK if sim.success else EXIT_NOT_FOUND
+
+
+# -- the command ---------------------------------------------------------------------------------
+SUBCOMMANDS: dict[str, Subcommand] = {
+    "list": Subcommand("list the models and their parameters", _list_arguments, run_list),
+    "solve": Subcommand(
+        "find a gait (periodic orbit) by multiple shooting", _solve_arguments, run_solve
+    ),
+    "simulate": Subcommand(
+        "simulate a model and print its returns to the section", _simulate_arguments, run_simulate
+    ),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``gaitopt`` argument parser, one subparser per entry of :data:`SUBCOMMANDS`."""
+    parser = _Parser(
+        prog=PROG,
+        description="Gaits of simple legged-locomotion models as periodic orbits of hybrid "
+        "systems. Exit status: 0 found, 1 not found, 2 bad input.",
+    )
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name, command in SUBCOMMANDS.items():
+        sub = commands.add_parser(name, help=command.help, description=command.help)
+        command.add_arguments(sub)
+        sub.set_defaults(run=command.run)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``gaitopt`` with ``argv`` (default ``sys.argv[1:]``); return the exit status.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments after the program name.
+
+    Returns
+    -------
+    int
+        0 found / completed, 1 not found / not completed, 2 bad input.
+    """
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # usage errors (2) and --help (0) exit from inside argparse
+        return exc.code if isinstance(exc.code, int) else EXIT_BAD_INPUT
+    try:
+        return args.run(args)
+    except InputError as exc:
+        message = " ".join(str(exc).split())  # one line, whatever the message holds
+        print(f"{PROG}: error: {message}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except BrokenPipeError:  # `gaitopt ... | head`: the reader left; say nothing more
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_NOT_FOUND
+
+
+if __name__ == "__main__":
+    sys.exit(main())

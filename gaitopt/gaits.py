@@ -1,0 +1,232 @@
+"""``make gaits``: the gait of every registered model at its defaults, with its pictures.
+
+Usage::
+
+    python -m gaitopt.gaits --out results [--models rimless_wheel,compass_gait]
+
+For each model (every entry of :data:`gaitopt.REGISTRY`, or those named): find the limit cycle
+from the model's default start and write, under ``OUT/<model>/``,
+
+* ``cycle.json`` — :meth:`LimitCycle.as_dict` (the object of ``gaitopt solve --json``), also
+  when the search failed (``"success": false``, with the message);
+* ``phase_portrait.png`` — the orbit's phase portrait with a simulated transient from the
+  model's default start;
+* ``walking.gif`` — for models with a drawable geometry, ~4 simulated steps from the fixed point;
+* ``return_map.png`` — for 1-D sections, the staircase plot of the return map (the rimless
+  wheel's closed-form map overlaid).
+
+Every file is written whole or not at all (a temporary file in the same directory, then
+:func:`os.replace`).  A summary table ends the run.  Exit status: 0 when every model was solved and
+drawn, 1 when a model failed to solve or a figure failed (the error is printed; the other models
+go on), 2 for bad arguments.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+import traceback
+import uuid
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import GaitoptInputError
+from .hybrid import HybridModel
+from .models import REGISTRY
+from .models import model as make_model
+from .result import LimitCycle
+from .shooting import find_limit_cycle
+from .simulation import simulate
+
+__all__ = ["main", "run_model", "write_json", "return_map_interval"]
+
+WALK_STEPS = 4  # simulated steps in walking.gif
+TRANSIENT_STEPS = 8  # simulated steps overlaid on the phase portrait
+
+
+def write_json(data: Any, path: str | os.PathLike) -> Path:
+    """Write ``data`` as JSON to ``path`` whole or not at all (temporary file, then replace).
+
+    Non-finite floats are refused (strict JSON); :meth:`LimitCycle.as_dict` already maps them to
+    ``null``.
+    """
+    path = Path(path)
+    text = json.dumps(data, indent=2, allow_nan=False) + "\n"
+    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
+    try:
+        with open(tmp, "x", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return path
+
+
+def return_map_interval(cycle: LimitCycle) -> tuple[float, float]:
+    """Interval of the staircase plot: from 0 to twice the fixed point's section coordinate."""
+    s = float(cycle.section_point[0])
+    if s == 0.0:
+        return (-1.0, 1.0)
+    return (min(0.0, 2 * s), max(0.0, 2 * s))
+
+
+def _drawable(model: HybridModel) -> bool:
+    return all(phase.points is not None for phase in model.phases)
+
+
+def run_model(name: str, out: Path) -> tuple[LimitCycle, list[str], list[str]]:
+    """Solve one model at its defaults and write its files under ``out/name``.
+
+    Returns
+    -------
+    cycle : LimitCycle
+    written : list of str
+        Files written.
+    errors : list of str
+        Figures that failed, each with its error.
+    """
+    from . import animation, plotting  # matplotlib only when drawing
+
+    model = make_model(name)
+    folder = out / name
+    folder.mkdir(parents=True, exist_ok=True)
+    cycle = find_limit_cycle(model)
+    write_json(cycle.as_dict(), folder / "cycle.json")
+    written, errors = ["cycle.json"], []
+    if not cycle.success:
+        return cycle, written, errors
+
+    def attempt(filename: str, draw) -> None:
+        try:
+            draw(folder / filename)
+            written.append(filename)
+        except Exception as exc:  # a figure must not stop the run; it is reported
+            errors.append(f"{filename}: {type(exc).__name__}: {exc}")
+            traceback.print_exc(file=sys.stderr)
+
+    def portrait(path: Path) -> None:
+        transient = simulate(model, steps=TRANSIENT_STEPS, inputs=cycle.inputs)
+        fig, _ = plotting.plot_phase_portrait(cycle, simulation=transient)
+        plotting.save_figure(fig, path)
+
+    def staircase(path: Path) -> None:
+        lo, hi = return_map_interval(cycle)
+        closed_form = getattr(model, "closed_form_map", None)
+        fig, _ = plotting.plot_return_map(
+            model, (lo, hi), start=lo + 0.9 * (hi - lo), closed_form=closed_form
+        )
+        plotting.save_figure(fig, path)
+
+    def walking(path: Path) -> None:
+        sim = simulate(model, cycle.x, steps=WALK_STEPS, inputs=cycle.inputs)
+        if not sim.arcs:
+            raise RuntimeError(f"simulation from the fixed point failed: {sim.message}")
+        animation.animate_walker(model, sim, path)
+
+    attempt("phase_portrait.png", portrait)
+    if len(model.section.coordinates) == 1:
+        attempt("return_map.png", staircase)
+    if _drawable(model):
+        attempt("walking.gif", walking)
+    return cycle, written, errors
+
+
+def _fmt(value: float, spec: str) -> str:
+    return "—" if value is None or not math.isfinite(value) else format(value, spec)
+
+
+def _summary(rows: list[tuple[str, LimitCycle | None]]) -> str:
+    header = ("model", "period", "max |mult|", "stable", "verified", "solve (ms)")
+    lines = [header]
+    for name, c in rows:
+        if c is None:
+            lines.append((name, "error", "—", "—", "—", "—"))
+            continue
+        mods = np.abs(c.multipliers)
+        lines.append(
+            (
+                name,
+                _fmt(c.period, ".10g") if c.success else "failed",
+                _fmt(float(mods.max()) if mods.size else float("nan"), ".4g"),
+                "—" if c.stable is None else str(c.stable),
+                str(bool(c.verified)),
+                _fmt(1e3 * c.solve_time, ".1f"),
+            )
+        )
+    widths = [max(len(row[i]) for row in lines) for i in range(len(header))]
+    text = [
+        "  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip()
+        for row in lines
+    ]
+    text.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(text)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``python -m gaitopt.gaits``; returns the exit status."""
+    parser = argparse.ArgumentParser(
+        prog="python -m gaitopt.gaits",
+        description="Find the gait of every model at its defaults; write JSON, PNG and GIF files.",
+    )
+    parser.add_argument("--out", default="results", help="output directory (default: results)")
+    parser.add_argument(
+        "--models",
+        default=None,
+        help=f"comma-separated model names (default: all of {', '.join(REGISTRY)})",
+    )
+    args = parser.parse_args(argv)
+    names = (
+        list(REGISTRY)
+        if args.models is None
+        else [n.strip() for n in args.models.split(",") if n.strip()]
+    )
+    try:
+        if not names:
+            raise GaitoptInputError(f"`--models` names no model, got {args.models!r}")
+        for name in names:
+            make_model(name)  # unknown names fail here, before any work
+    except GaitoptInputError as exc:
+        print(f"gaitopt.gaits: error: {exc}", file=sys.stderr)
+        return 2
+    out = Path(args.out)
+
+    rows: list[tuple[str, LimitCycle | None]] = []
+    failed = False
+    for k, name in enumerate(names, 1):
+        print(f"[{k}/{len(names)}] {name}: solving ...", flush=True)
+        start = time.perf_counter()
+        try:
+            cycle, written, errors = run_model(name, out)
+        except Exception as exc:
+            traceback.print_exc(file=sys.stderr)
+            print(f"[{k}/{len(names)}] {name}: ERROR {type(exc).__name__}: {exc}", flush=True)
+            rows.append((name, None))
+            failed = True
+            continue
+        rows.append((name, cycle))
+        status = "solved" if cycle.success else f"NOT SOLVED ({cycle.message})"
+        print(
+            f"[{k}/{len(names)}] {name}: {status}; wrote {', '.join(written)} "
+            f"to {out / name} in {time.perf_counter() - start:.1f} s",
+            flush=True,
+        )
+        for error in errors:
+            print(f"[{k}/{len(names)}] {name}: FIGURE FAILED {error}", flush=True)
+        failed |= not cycle.success or bool(errors)
+    print()
+    print(_summary(rows))
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

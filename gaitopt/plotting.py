@@ -1,0 +1,412 @@
+"""Static figures of gaits: phase portraits of the orbit and staircase plots of 1-D return maps.
+
+Every function draws into a given :class:`matplotlib.axes.Axes` (or a new figure) and returns
+``(fig, ax)``; nothing is shown, so the functions work under the Agg backend in scripts and CI.
+:func:`save_figure` writes a figure whole or not at all (a temporary file, then
+:func:`os.replace`).
+
+Time is in the model's unit: seconds for the physical models, dimensionless time for Van der Pol
+and Garcia's simplest walker (``τ = t·sqrt(g/l)``).
+"""
+
+from __future__ import annotations
+
+import os
+import uuid
+from collections.abc import Callable
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from .errors import GaitoptInputError
+from .hybrid import HybridModel, Transition
+from .result import LimitCycle
+from .returnmap import fixed_points_1d, return_map
+from .simulation import Simulation
+
+__all__ = [
+    "plot_phase_portrait",
+    "plot_return_map",
+    "coordinate_pairs",
+    "save_figure",
+    "temporary_path",
+]
+
+_RATE_SUFFIX = "_dot"
+# Samples per simulated arc for the transient overlay.
+_TRANSIENT_SAMPLES = 150
+
+
+def coordinate_pairs(states: tuple[str, ...] | list[str]) -> list[str]:
+    """The coordinates ``q`` of ``states`` whose rate ``q_dot`` is also a state, in state order.
+
+    >>> coordinate_pairs(("stance", "swing", "stance_dot", "swing_dot"))
+    ['stance', 'swing']
+    """
+    return [q for q in states if not q.endswith(_RATE_SUFFIX) and q + _RATE_SUFFIX in states]
+
+
+def _transition(model: HybridModel, phase: int, name: str) -> Transition | None:
+    for tr in model.phases[phase].transitions:
+        if tr.name == name:
+            return tr
+    return None
+
+
+def _new_axes(ax: Axes | None, figsize: tuple[float, float]) -> tuple[Figure, Axes]:
+    if ax is None:
+        fig, ax = plt.subplots(figsize=figsize, layout="constrained")
+        return fig, ax
+    return ax.figure, ax
+
+
+def plot_phase_portrait(
+    cycle: LimitCycle,
+    ax: Axes | None = None,
+    simulation: Simulation | None = None,
+) -> tuple[Figure, Axes]:
+    """Phase portrait of a gait: each coordinate ``q`` against its rate ``q_dot`` along the orbit.
+
+    Every state ``q`` with a partner ``q_dot`` in an arc's states gets one colour.  Each phase arc
+    of the orbit is a solid line; each reset that moves the state (an impact, a relabelling such as
+    the compass gait's leg swap) is a dashed jump from the arc's end to the next arc's start
+    (cyclically: the last arc jumps to the first), with the pre-reset state marked by a hollow
+    circle and the post-reset state by a filled one.  A simulated transient, if given, is drawn as
+    thin grey lines (one per coordinate, broken at resets) under the orbit.
+
+    Parameters
+    ----------
+    cycle : LimitCycle
+        A solved gait (``cycle.success`` true, ``cycle.orbit`` not empty).
+    ax : matplotlib.axes.Axes, optional
+        Where to draw; a new figure if omitted.
+    simulation : Simulation, optional
+        A simulated transient of the same model (e.g. from :func:`gaitopt.simulate` started off the
+        orbit) to overlay.
+
+    Returns
+    -------
+    fig : matplotlib.figure.Figure
+    ax : matplotlib.axes.Axes
+        The axes.  Its line artists are, for each coordinate: one per orbit arc, then one per
+        nontrivial reset, then (with ``simulation``) one transient line.
+
+    Notes
+    -----
+    Coordinates are in the model's units (rad for the walkers' angles, m for positions); rates in
+    those units per unit of the model's time (s, or dimensionless time for Van der Pol and the
+    simplest walker).  The title gives the model, the period and the largest modulus of the
+    nontrivial Floquet multipliers.
+
+    Raises
+    ------
+    GaitoptInputError
+        If ``cycle`` has no orbit (a failed search) or no state has a ``_dot`` partner.
+    """
+    if not cycle.success or not cycle.orbit:
+        raise GaitoptInputError(
+            f"`cycle` must be a solved gait with an orbit; got success={cycle.success} "
+            f"({cycle.message}). Plot only cycles with success=True"
+        )
+    model = cycle.model
+    arcs = cycle.orbit
+    names: list[str] = []
+    for arc in arcs:
+        names += [q for q in coordinate_pairs(arc.states) if q not in names]
+    if not names:
+        raise GaitoptInputError(
+            f"{model.name}: no state q has a rate q{_RATE_SUFFIX} in the orbit's states "
+            f"{arcs[0].states}; the phase portrait needs such pairs"
+        )
+    fig, ax = _new_axes(ax, (7.6, 4.8))
+    colours = {q: f"C{i % 10}" for i, q in enumerate(names)}
+
+    # The orbit: one solid line per coordinate and arc.
+    for arc in arcs:
+        for q in coordinate_pairs(arc.states):
+            i, j = arc.states.index(q), arc.states.index(q + _RATE_SUFFIX)
+            first = all(q not in coordinate_pairs(a.states) for a in arcs[: arcs.index(arc)])
+            ax.plot(
+                arc.x[i], arc.x[j], color=colours[q], lw=1.8, label=q if first else None, zorder=3
+            )
+
+    # Resets: dashed jumps from each arc's end to the next arc's start.
+    jump_label = "reset (impact)"
+    for k, arc in enumerate(arcs):
+        nxt = arcs[(k + 1) % len(arcs)]
+        tr = _transition(model, arc.phase, arc.transition)
+        for q in coordinate_pairs(arc.states):
+            if q not in coordinate_pairs(nxt.states):
+                continue
+            i, j = arc.states.index(q), arc.states.index(q + _RATE_SUFFIX)
+            i2, j2 = nxt.states.index(q), nxt.states.index(q + _RATE_SUFFIX)
+            before = np.array([arc.x[i, -1], arc.x[j, -1]])
+            after = np.array([nxt.x[i2, 0], nxt.x[j2, 0]])
+            scale = max(np.ptp(arc.x[i]), np.ptp(arc.x[j]), 1e-300)
+            if np.linalg.norm(after - before) <= 1e-6 * scale:
+                # An identity reset (Van der Pol's section crossing): nothing to draw.  The dense
+                # orbit closes only to the shooting accuracy, hence the relative 1e-6.
+                continue
+            ax.plot(*np.c_[before, after], color=colours[q], lw=1.2, ls="--", zorder=2)
+            ax.scatter(*before, s=28, facecolors="white", edgecolors=colours[q], zorder=4)
+            ax.scatter(
+                *after,
+                s=28,
+                color=colours[q],
+                zorder=4,
+                label=jump_label if tr is not None and tr.impact else "reset",
+            )
+            jump_label = None
+
+    if simulation is not None:
+        _plot_transient(ax, model, simulation, names)
+
+    ax.set_xlabel("coordinate q (rad or m)")
+    ax.set_ylabel("rate dq/dt (per unit time)")
+    largest = np.max(np.abs(cycle.multipliers)) if len(cycle.multipliers) else float("nan")
+    stable = {True: "stable", False: "unstable"}.get(cycle.stable, "stability unknown")
+    ax.set_title(
+        f"{model.title or model.name}: period {cycle.period:.6g}, "
+        f"max |multiplier| {largest:.3g} ({stable})",
+        fontsize=10,
+    )
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+    return fig, ax
+
+
+def _plot_transient(ax: Axes, model: HybridModel, simulation: Simulation, names: list[str]) -> None:
+    """One thin grey line per coordinate through all simulated arcs, NaN at resets."""
+    label = "simulated transient"
+    for q in names:
+        xs: list[np.ndarray] = []
+        ys: list[np.ndarray] = []
+        for arc in simulation.arcs:
+            states = model.phases[arc.phase].states
+            if q not in states or q + _RATE_SUFFIX not in states:
+                continue
+            _, X = arc.sample(_TRANSIENT_SAMPLES)
+            xs += [X[states.index(q)], [np.nan]]
+            ys += [X[states.index(q + _RATE_SUFFIX)], [np.nan]]
+        if xs:
+            ax.plot(
+                np.concatenate(xs),
+                np.concatenate(ys),
+                color="0.55",
+                lw=0.7,
+                zorder=1,
+                label=label,
+            )
+            label = None
+
+
+def plot_return_map(
+    model: HybridModel,
+    interval: tuple[float, float],
+    start: float | None = None,
+    iterations: int = 8,
+    ax: Axes | None = None,
+    closed_form: Callable[[float], float] | None = None,
+    *,
+    samples: int = 80,
+) -> tuple[Figure, Axes]:
+    """Staircase (cobweb) plot of a 1-D step-to-step return map ``s_{n+1} = P(s_n)``.
+
+    The map is sampled by simulation (:func:`gaitopt.returnmap.fixed_points_1d`) on ``interval``;
+    where the motion does not return to the section it is NaN and the curve has a gap, and where
+    it jumps (the rimless wheel's map at the vaulting speed ω₁, between rocking and rolling) the
+    jump is located by bisection and the curve broken there.  Then the diagonal ``P(s) = s``, the
+    staircase of ``iterations`` simulated steps from ``start``, and every fixed point found on
+    the interval: filled if stable, hollow if unstable (each one solved and verified as a limit
+    cycle, its multiplier written next to it).
+
+    Parameters
+    ----------
+    model : HybridModel
+        A model whose Poincaré section has one coordinate (rimless wheel: ``theta_dot``, rad/s;
+        Van der Pol: ``q_dot``).
+    interval : tuple of float
+        ``(low, high)`` range of the section coordinate, in its unit.
+    start : float, optional
+        Start of the staircase; default: the model's :meth:`default_start` if it lies in the
+        interval, else the interval's midpoint.
+    iterations : int
+        Steps of the staircase (it stops early where the map is undefined).
+    ax : matplotlib.axes.Axes, optional
+        Where to draw; a new figure if omitted.
+    closed_form : callable, optional
+        ``closed_form(s) -> P(s)`` (NaN where undefined), drawn dashed over the sampled map, e.g.
+        ``model.closed_form_map`` of the rimless wheel.
+    samples : int
+        Number of map samples on the interval.
+
+    Returns
+    -------
+    fig : matplotlib.figure.Figure
+    ax : matplotlib.axes.Axes
+        The stable fixed points are the line artist with ``gid="stable fixed points"`` (the
+        unstable ones ``gid="unstable fixed points"``), its x data the fixed points.
+
+    Raises
+    ------
+    GaitoptInputError
+        If the section is not one-dimensional, the interval is empty, or ``iterations`` or
+        ``samples`` is not a positive integer.
+    """
+    if len(model.section.coordinates) != 1:
+        raise GaitoptInputError(
+            f"{model.name}: a staircase plot needs a 1-D section; this one has coordinates "
+            f"{', '.join(model.section.coordinates)}"
+        )
+    lo, hi = map(float, interval)
+    if not lo < hi:
+        raise GaitoptInputError(f"`interval` must be increasing, got {interval!r}")
+    if int(iterations) != iterations or iterations < 0:
+        raise GaitoptInputError(f"`iterations` must be a non-negative integer, got {iterations!r}")
+    if int(samples) != samples or samples < 2:
+        raise GaitoptInputError(f"`samples` must be an integer ≥ 2, got {samples!r}")
+    (name,) = model.section.coordinates
+
+    def P(s: float) -> float:
+        return float(return_map(model, [s])[0])
+
+    found = fixed_points_1d(model, (lo, hi), samples=int(samples))
+    grid, values = _break_jumps(P, found.grid, found.values)
+
+    fig, ax = _new_axes(ax, (5.6, 5.2))
+    ax.plot(grid, values, color="C0", lw=1.8, label=f"return map P({name}) (simulated)")
+    ax.plot([lo, hi], [lo, hi], color="k", lw=0.8, ls=":", label="diagonal P(s) = s")
+    if closed_form is not None:
+        fine = np.linspace(lo, hi, 600)
+        ax.plot(
+            fine,
+            [closed_form(s) for s in fine],
+            color="C3",
+            lw=1.2,
+            ls="--",
+            label="closed form",
+        )
+
+    # The staircase: vertical to the map, horizontal to the diagonal, repeated.
+    if start is None:
+        guess = model.default_start().get(name, np.nan)
+        start = guess if lo <= guess <= hi else 0.5 * (lo + hi)
+    s = float(start)
+    path_x, path_y = [s], [s]
+    for _ in range(int(iterations)):
+        s_next = P(s)
+        if not np.isfinite(s_next):
+            break
+        path_x += [s, s_next]
+        path_y += [s_next, s_next]
+        s = s_next
+    ax.plot(path_x, path_y, color="C1", lw=1.0, label=f"staircase from {start:.4g}")
+    ax.plot([start], [start], "s", color="C1", ms=5)
+
+    # Fixed points, each a verified limit cycle (duplicates from nearby brackets merged).
+    points: dict[bool, list[tuple[float, complex]]] = {True: [], False: []}
+    for c in found.cycles:
+        x = float(c.section_point[0])
+        if all(abs(x - y) > 1e-8 * max(1.0, abs(x)) for y, _ in points[True] + points[False]):
+            points[bool(c.stable)].append((x, complex(c.multipliers[0])))
+    for stable in (True, False):
+        xs = [x for x, _ in points[stable]]
+        kind = "stable" if stable else "unstable"
+        ax.plot(
+            xs,
+            xs,
+            "o",
+            ms=8,
+            color="k",
+            mfc="k" if stable else "white",
+            zorder=5,
+            label=f"{kind} fixed point" if xs else None,
+            gid=f"{kind} fixed points",
+        )
+        for x, lam in points[stable]:
+            ax.annotate(
+                f" {x:.6g}\n λ = {lam.real:.3g}",
+                (x, x),
+                xytext=(8, -22),
+                textcoords="offset points",
+                fontsize=8,
+            )
+
+    finite = values[np.isfinite(values)]
+    top = max(hi, float(finite.max()) if finite.size else hi)
+    bottom = min(lo, float(finite.min()) if finite.size else lo)
+    ax.set_xlim(lo, hi)
+    ax.set_ylim(bottom, top)
+    ax.set_xlabel(f"{name} just after return n")
+    ax.set_ylabel(f"{name} just after return n + 1")
+    ax.set_title(f"{model.title or model.name}: step-to-step return map", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="upper left")
+    return fig, ax
+
+
+def _break_jumps(
+    P: Callable[[float], float], grid: np.ndarray, values: np.ndarray, *, bisections: int = 30
+) -> tuple[np.ndarray, np.ndarray]:
+    """Insert NaN where the sampled map jumps, with samples on both sides of the jump.
+
+    A jump is suspected where consecutive defined samples differ by far more than usual; it is
+    confirmed by bisection (the difference does not shrink with the bracket).
+    """
+    d = np.abs(np.diff(values))
+    if not np.any(np.isfinite(d)):
+        return grid, values
+    typical = np.nanmedian(d)
+    span = np.nanmax(values) - np.nanmin(values)
+    suspect = max(10 * typical, 0.05 * span)
+    out_x, out_y = [grid[0]], [values[0]]
+    for k in range(len(grid) - 1):
+        a, b, fa, fb = grid[k], grid[k + 1], values[k], values[k + 1]
+        if np.isfinite(d[k]) and d[k] > suspect:
+            jump = True
+            for _ in range(bisections):
+                m = 0.5 * (a + b)
+                fm = P(m)
+                if not np.isfinite(fm):
+                    break
+                if abs(fm - fa) < abs(fb - fm):
+                    a, fa = m, fm
+                else:
+                    b, fb = m, fm
+                if abs(fb - fa) < 0.5 * suspect:  # the step shrinks with the bracket: steep
+                    jump = False
+                    break
+            if jump:  # the step stays at bracket width 2⁻³⁰ (or the map is undefined inside)
+                out_x += [a, np.nan, b]
+                out_y += [fa, np.nan, fb]
+        out_x.append(grid[k + 1])
+        out_y.append(values[k + 1])
+    return np.array(out_x), np.array(out_y)
+
+
+def save_figure(fig: Figure, path: str | os.PathLike, *, dpi: int = 110) -> Path:
+    """Write ``fig`` to ``path`` whole or not at all, then close it.
+
+    The figure is saved to a temporary file in the same directory and moved into place with
+    :func:`os.replace`; the format comes from the suffix of ``path``.
+    """
+    path = Path(path)
+    fmt = path.suffix.lstrip(".") or "png"
+    tmp = temporary_path(path)
+    try:
+        fig.savefig(tmp, format=fmt, dpi=dpi)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    finally:
+        plt.close(fig)
+    return path
+
+
+def temporary_path(path: Path, suffix: str = ".tmp") -> Path:
+    """A fresh hidden name next to ``path`` for writing before :func:`os.replace`."""
+    return path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}{suffix}")

@@ -1,0 +1,191 @@
+"""Figures and the ``make gaits`` runner: phase portraits, staircase plots, walker GIFs.
+
+Smoke-level but honest: each test checks what the figure shows against the numbers it was drawn
+from (the orbit, a closed form, the ground line), not only that a file appeared.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from PIL import Image  # noqa: E402
+
+import gaitopt  # noqa: E402
+from gaitopt.animation import animate_walker, walker_frames  # noqa: E402
+from gaitopt.errors import GaitoptInputError  # noqa: E402
+from gaitopt.gaits import main as gaits_main  # noqa: E402
+from gaitopt.gaits import write_json  # noqa: E402
+from gaitopt.plotting import plot_phase_portrait, plot_return_map  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def compass() -> gaitopt.LimitCycle:
+    cycle = gaitopt.find_limit_cycle(gaitopt.model("compass_gait"))
+    assert cycle.success, cycle.message
+    return cycle
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    yield
+    plt.close("all")
+
+
+def _hidden(folder) -> list[str]:
+    return sorted(p.name for p in folder.rglob(".*"))
+
+
+# -- phase portrait ---------------------------------------------------------------------------
+
+
+def test_phase_portrait_compass_gait_lines_match_the_orbit(compass):
+    fig, ax = plot_phase_portrait(compass)
+    (arc,) = compass.orbit
+    # Two coordinates with rates (stance, swing); each: one orbit arc and one heel-strike jump.
+    lines = ax.get_lines()
+    assert len(lines) == 2 * (1 + 1)
+    solid = {ln.get_label(): ln for ln in lines if ln.get_linestyle() == "-"}
+    dashed = [ln for ln in lines if ln.get_linestyle() == "--"]
+    assert set(solid) == {"stance", "swing"} and len(dashed) == 2
+    for q, line in solid.items():
+        x = arc.x[arc.states.index(q)]
+        v = arc.x[arc.states.index(q + "_dot")]
+        assert (line.get_xdata().min(), line.get_xdata().max()) == (x.min(), x.max())
+        assert (line.get_ydata().min(), line.get_ydata().max()) == (v.min(), v.max())
+    # Each jump runs from the pre-impact state to the post-impact state (the fixed point).
+    fp = compass.fixed_point
+    ends = {(ln.get_xdata()[1], ln.get_ydata()[1]) for ln in dashed}
+    assert ends == {(fp["stance"], fp["stance_dot"]), (fp["swing"], fp["swing_dot"])}
+    # The axes show every state of the orbit.
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    assert x0 <= arc.x[:2].min() and arc.x[:2].max() <= x1
+    assert y0 <= arc.x[2:].min() and arc.x[2:].max() <= y1
+    assert "0.734461" in ax.get_title()  # period (Drake's CompassGait: 0.7344606 s)
+
+
+def test_phase_portrait_overlays_one_transient_line_per_coordinate(compass):
+    sim = gaitopt.simulate(compass.model, steps=2)
+    _, ax = plot_phase_portrait(compass, simulation=sim)
+    grey = [ln for ln in ax.get_lines() if ln.get_label() == "simulated transient"]
+    assert len(ax.get_lines()) == 4 + 2 and len(grey) == 1
+    assert np.isnan(grey[0].get_xdata()).sum() == len(sim.arcs)  # broken at every reset
+
+
+def test_phase_portrait_refuses_a_failed_search():
+    failed = gaitopt.LimitCycle(False, "did not converge", gaitopt.model("compass_gait"))
+    with pytest.raises(GaitoptInputError, match="success=False"):
+        plot_phase_portrait(failed)
+
+
+# -- return map -------------------------------------------------------------------------------
+
+
+def test_rimless_wheel_staircase_marks_the_closed_form_rolling_fixed_point():
+    model = gaitopt.model("rimless_wheel")
+    _, ax = plot_return_map(
+        model, (0.5, 2.0), start=1.9, iterations=5, closed_form=model.closed_form_map, samples=30
+    )
+    by_gid = {ln.get_gid(): ln for ln in ax.get_lines() if ln.get_gid()}
+    stable = by_gid["stable fixed points"].get_xdata()
+    assert len(by_gid["unstable fixed points"].get_xdata()) == 0
+    # Source: Tedrake, Underactuated Robotics, "Simple models of walking", rimless wheel:
+    # ω* = cot 2α · sqrt(4 g/l sin α sin γ) = 1.095462839648 rad/s at the defaults.
+    assert len(stable) == 1
+    assert abs(stable[0] - model.rolling_speed()) < 1e-8
+    assert math.isclose(model.rolling_speed(), 1.095462839648, abs_tol=1e-12)
+
+    # The sampled map breaks at the vaulting speed ω₁ (rocking below, rolling above) ...
+    curve = next(ln for ln in ax.get_lines() if ln.get_label().startswith("return map"))
+    x, y = np.asarray(curve.get_xdata()), np.asarray(curve.get_ydata())
+    (gap,) = np.flatnonzero(np.isnan(x))
+    assert abs(x[gap - 1] - model.vaulting_speed()) < 1e-6
+    assert abs(x[gap + 1] - model.vaulting_speed()) < 1e-6
+    # ... and on the rolling branch agrees with the closed-form map (energy + momentum).
+    rolling = np.isfinite(x) & (x > model.vaulting_speed() + 1e-3)
+    closed = np.array([model.closed_form_map(s) for s in x[rolling]])
+    np.testing.assert_allclose(y[rolling], closed, atol=1e-8)
+    # The staircase starts on the diagonal and each step lands on the map.
+    stair = next(ln for ln in ax.get_lines() if ln.get_label().startswith("staircase"))
+    sx, sy = stair.get_xdata(), stair.get_ydata()
+    assert (sx[0], sy[0]) == (1.9, 1.9)
+    np.testing.assert_allclose(sy[1::2], [model.closed_form_map(s) for s in sx[1::2]], atol=1e-8)
+
+
+def test_return_map_needs_a_one_dimensional_section():
+    with pytest.raises(GaitoptInputError, match="1-D section"):
+        plot_return_map(gaitopt.model("compass_gait"), (0.0, 1.0))
+
+
+# -- animation --------------------------------------------------------------------------------
+
+
+def test_walker_gif_has_frames_and_steps_land_on_the_ground(compass, tmp_path):
+    model = compass.model
+    sim = gaitopt.simulate(model, compass.x, steps=2)
+    assert sim.success, sim.message
+    path = animate_walker(model, sim, tmp_path / "walk.gif", fps=10, max_frames=6, dpi=30)
+    with Image.open(path) as im:
+        assert im.format == "GIF"
+        assert im.n_frames == 6  # 1.47 s at 10 fps needs 15 frames: capped at max_frames
+    assert _hidden(tmp_path) == []  # the temporary file was moved into place
+
+    # Each new contact point (the swing foot at heel strike) is on the ground line.
+    frames = walker_frames(model, sim, [a.t1 for a in sim.arcs])
+    contacts = np.array([f["contact"] for f in frames])
+    assert contacts[0].tolist() == [0.0, 0.0]
+    next_contact = (
+        contacts[0] + np.asarray(model.phases[0].points(sim.events[0].state_before, model.p))[:, 2]
+    )
+    assert next_contact[0] > 0.3  # a step of about 2 l sin(0.27) forward (downhill)
+    np.testing.assert_allclose(next_contact[1], -next_contact[0] * math.tan(model.slope), atol=1e-9)
+    last = walker_frames(model, sim, [sim.arcs[-1].t0])[0]["contact"]
+    np.testing.assert_allclose(last, next_contact, atol=1e-12)
+
+
+def test_models_without_geometry_are_not_animated(tmp_path):
+    model = gaitopt.model("vanderpol")
+    sim = gaitopt.simulate(model, steps=1)
+    with pytest.raises(GaitoptInputError, match="no drawing points"):
+        animate_walker(model, sim, tmp_path / "vdp.gif")
+    assert list(tmp_path.iterdir()) == []
+
+
+# -- the `make gaits` runner ------------------------------------------------------------------
+
+
+def test_gaits_runner_writes_cycle_json_atomically(tmp_path, capsys):
+    status = gaits_main(["--out", str(tmp_path), "--models", "rimless_wheel"])
+    out = capsys.readouterr().out
+    assert status == 0, out
+    folder = tmp_path / "rimless_wheel"
+    data = json.loads((folder / "cycle.json").read_text())
+    assert data["model"] == "rimless_wheel" and data["success"] is True
+    assert abs(data["fixed_point"]["theta_dot"] - 1.095462839648) < 1e-8  # Tedrake's ω*
+    names = sorted(p.name for p in folder.iterdir())
+    assert names == ["cycle.json", "phase_portrait.png", "return_map.png", "walking.gif"]
+    assert _hidden(tmp_path) == []  # no temporary file left behind
+    assert "rimless_wheel" in out.splitlines()[-1] and "True" in out.splitlines()[-1]
+
+
+def test_gaits_runner_rejects_unknown_models(tmp_path, capsys):
+    assert gaits_main(["--out", str(tmp_path), "--models", "rimless_wheal"]) == 2
+    assert "did you mean 'rimless_wheel'" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_write_json_is_all_or_nothing(tmp_path):
+    path = tmp_path / "cycle.json"
+    write_json({"period": 1.0}, path)
+    with pytest.raises(ValueError):
+        write_json({"period": float("nan")}, path)  # not JSON: the old file stays whole
+    assert json.loads(path.read_text()) == {"period": 1.0}
+    assert _hidden(tmp_path) == []
