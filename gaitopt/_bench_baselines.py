@@ -156,11 +156,11 @@ def vanderpol(params: Mapping[str, float]) -> HandWritten:
 
 # -- Rimless wheel: θ̈ = (g/l) sin θ; θ = γ + α strikes; θ⁺ = θ − 2α, θ̇⁺ = cos 2α θ̇ ----------
 def rimless_wheel(params: Mapping[str, float]) -> HandWritten:
-    g, l, gamma = params["gravity"], params["length"], params["slope"]
+    g, length, gamma = params["gravity"], params["length"], params["slope"]
     alpha = math.pi / params["spokes"]
 
     def rhs(t, x):
-        return [x[1], g / l * math.sin(x[0])]
+        return [x[1], g / length * math.sin(x[0])]
 
     strike = _event(lambda t, x: x[0] - gamma - alpha, +1)
 
@@ -169,8 +169,11 @@ def rimless_wheel(params: Mapping[str, float]) -> HandWritten:
         return np.array([theta - 2 * alpha, math.cos(2 * alpha) * theta_dot]), t
 
     return HandWritten(
-        "rimless_wheel", ("theta", "theta_dot"), ("theta_dot",),
-        lambda s: np.array([gamma - alpha, s[0]]), step,
+        "rimless_wheel",
+        ("theta", "theta_dot"),
+        ("theta_dot",),
+        lambda s: np.array([gamma - alpha, s[0]]),
+        step,
     )
 
 
@@ -181,7 +184,7 @@ def compass_gait(params: Mapping[str, float]) -> HandWritten:
     the whole walker about the striking foot, and of the trailing leg about the hip)."""
     mh, m, a, b = params["mass_hip"], params["mass_leg"], params["a"], params["b"]
     g, gamma = params["gravity"], params["slope"]
-    l = a + b
+    l = a + b  # noqa: E741 — leg length, as in Goswami et al.
 
     def rhs(t, x):
         st, sw, std, swd = x
@@ -281,24 +284,36 @@ def solve(hw: HandWritten, start: np.ndarray) -> BaselineResult:
             return np.full(len(s), 1e3)  # push fsolve away from where the walker falls
 
     try:
-        s_star, _, ier, msg = fsolve(residual, np.asarray(start, float), xtol=XTOL, full_output=True)
+        s_star, _, ier, msg = fsolve(
+            residual, np.asarray(start, float), xtol=XTOL, full_output=True
+        )
         if ier != 1:
-            return BaselineResult(False, f"fsolve: {msg}", map_evaluations=count[0],
-                                  solve_time=time.perf_counter() - t0)
+            return BaselineResult(
+                False,
+                f"fsolve: {msg}",
+                map_evaluations=count[0],
+                solve_time=time.perf_counter() - t0,
+            )
         jac = np.empty((len(s_star), len(s_star)))
         for i in range(len(s_star)):
             e = np.zeros(len(s_star))
             e[i] = FD_STEP
             jac[:, i] = (P(s_star + e) - P(s_star - e)) / (2 * FD_STEP)
     except NoReturn as err:
-        return BaselineResult(False, str(err), map_evaluations=count[0],
-                              solve_time=time.perf_counter() - t0)
+        return BaselineResult(
+            False, str(err), map_evaluations=count[0], solve_time=time.perf_counter() - t0
+        )
     mult = np.linalg.eigvals(jac).astype(complex)
     mult = mult[np.argsort(-np.abs(mult))]
     elapsed = time.perf_counter() - t0
     x_star = hw.lift(s_star)
     period = hw.step(x_star)[1]  # outside the timed part
     return BaselineResult(
-        True, "fsolve converged", dict(zip(hw.state_names, map(float, x_star))), mult,
-        period, count[0], elapsed,
+        True,
+        "fsolve converged",
+        dict(zip(hw.state_names, map(float, x_star), strict=True)),
+        mult,
+        period,
+        count[0],
+        elapsed,
     )

@@ -54,7 +54,10 @@ __all__ = ["main", "run"]
 # -- reference numbers (DESIGN.md, "Reference numbers the tests must meet") ---------------------
 _VDP_PERIOD = 6.6632868593231301897  # Hairer, Nørsett & Wanner, μ = 1
 _COMPASS = {  # DESIGN.md; agrees with Drake's CompassGait simulated to convergence (7 digits)
-    "stance": -0.2187746, "swing": 0.3237746, "stance_dot": 1.0928668, "swing_dot": 0.3761346,
+    "stance": -0.2187746,
+    "swing": 0.3237746,
+    "stance_dot": 1.0928668,
+    "swing_dot": 0.3761346,
 }
 _GARCIA = {"theta": 0.20031090049483, "theta_dot": -0.19983247291764}  # Garcia et al. 1998
 
@@ -105,9 +108,7 @@ def _machine() -> dict[str, Any]:
         "processor": platform.processor() or None,
         "cpu_count": os.cpu_count(),
         "python": platform.python_version(),
-        "versions": {
-            d: _version(d) for d in ("gaitopt", "casadi", "scipy", "numpy", "drake")
-        },
+        "versions": {d: _version(d) for d in ("gaitopt", "casadi", "scipy", "numpy", "drake")},
     }
 
 
@@ -205,7 +206,7 @@ def _baseline(model: Any, repeats: int) -> dict[str, Any]:
             f"with a terminal directional event; fsolve(xtol={baselines.XTOL:g}) on P(s) - s; "
             f"multipliers: eigvals of central differences (step {baselines.FD_STEP:g})"
         ),
-        "start": dict(zip(model.section.coordinates, map(float, start))),
+        "start": dict(zip(model.section.coordinates, map(float, start), strict=True)),
         "repeats": repeats,
         "median_s": _median([r.solve_time for r in runs]),
         "min_s": float(min(r.solve_time for r in runs)),
@@ -324,7 +325,7 @@ def _drake_settle(
         "last_change": delta,
         "simulated_time": float(ctx.get_time()),
         "integrator_steps": int(simulator.get_num_steps_taken()),
-        "fixed_point": dict(zip(names, map(float, posts[-1]))) if posts else {},
+        "fixed_point": dict(zip(names, map(float, posts[-1]), strict=True)) if posts else {},
     }
 
 
@@ -332,7 +333,10 @@ def _drake(drake: Any, model: Any, repeats: int, converge: bool) -> dict[str, An
     if _drake_system(drake, model) is None:
         return {"skipped": f"no Drake peer for {model.name!r}"}
     x0 = model.lift(model.section_vector({}))
-    out: dict[str, Any] = {"start": dict(zip(model.state_names, map(float, x0))), "runs": {}}
+    out: dict[str, Any] = {
+        "start": dict(zip(model.state_names, map(float, x0), strict=True)),
+        "runs": {},
+    }
     plans = [("settle, accuracy 1e-4 (default)", 1e-4, 1e-5, 200, repeats)]
     plans.append(("settle, accuracy 1e-10", 1e-10, 1e-5, 200, max(1, min(repeats, 3))))
     if converge:
@@ -343,7 +347,10 @@ def _drake(drake: Any, model: Any, repeats: int, converge: bool) -> dict[str, An
         record = dict(runs[-1])
         record.pop("time_s")
         record.update(
-            accuracy=accuracy, tolerance=tol, max_steps=max_steps, repeats=n,
+            accuracy=accuracy,
+            tolerance=tol,
+            max_steps=max_steps,
+            repeats=n,
             median_s=_median([r["time_s"] for r in runs]),
             min_s=float(min(r["time_s"] for r in runs)),
         )
@@ -469,7 +476,13 @@ def _goals(record: dict[str, Any]) -> dict[str, Any]:
 
 # -- the table ------------------------------------------------------------------------------------
 def _ms(s: float | None) -> str:
-    return "—" if s is None or not math.isfinite(s) else f"{1e3 * s:.3g}" if s < 1 else f"{1e3 * s:.0f}"
+    return (
+        "—"
+        if s is None or not math.isfinite(s)
+        else f"{1e3 * s:.3g}"
+        if s < 1
+        else f"{1e3 * s:.0f}"
+    )
 
 
 def _sci(e: float | None) -> str:
@@ -499,36 +512,65 @@ def rows(record: dict[str, Any]) -> list[list[str]]:
                 return "—"
             return f"{base / t:.3g}×"
 
-        for key, label in (("verify_false", "gaitopt verify=False"),
-                           ("verify_true", "gaitopt verify=True")):
+        for key, label in (
+            ("verify_false", "gaitopt verify=False"),
+            ("verify_true", "gaitopt verify=True"),
+        ):
             first, built = e["first_call"][key], e["once_built"][key]
-            out.append([
-                name, label, _ms(first.get("median_s")), _ms(built["median_s"]),
-                speed(built["median_s"]), "(ref)",
-                _sci(e["gaitopt"].get("error_vs_reference")),
-                _mults(e["gaitopt"]["multipliers"]) if key == "verify_false" else "",
-            ])
+            out.append(
+                [
+                    name,
+                    label,
+                    _ms(first.get("median_s")),
+                    _ms(built["median_s"]),
+                    speed(built["median_s"]),
+                    "(ref)",
+                    _sci(e["gaitopt"].get("error_vs_reference")),
+                    _mults(e["gaitopt"]["multipliers"]) if key == "verify_false" else "",
+                ]
+            )
         b = e.get("baseline", {})
         if "skipped" in b:
             out.append([name, "hand-written baseline", "—", "—", "—", "—", "—", b["skipped"]])
         elif b:
-            out.append([
-                name, "solve_ivp + fsolve (by hand)", "—", _ms(b["median_s"]), "1×",
-                _sci(b.get("error_vs_gaitopt")), _sci(b.get("error_vs_reference")),
-                _mults(b["multipliers"]),
-            ])
+            out.append(
+                [
+                    name,
+                    "solve_ivp + fsolve (by hand)",
+                    "—",
+                    _ms(b["median_s"]),
+                    "1×",
+                    _sci(b.get("error_vs_gaitopt")),
+                    _sci(b.get("error_vs_reference")),
+                    _mults(b["multipliers"]),
+                ]
+            )
         for label, r in e.get("drake", {}).get("runs", {}).items():
             note = f"{r['steps']} steps" + ("" if r["settled"] else ", not settled")
-            out.append([
-                name, f"Drake {label} ({note})", "—", _ms(r["median_s"]), speed(r["median_s"]),
-                _sci(r.get("error_vs_gaitopt")), _sci(r.get("error_vs_reference")), "—",
-            ])
+            out.append(
+                [
+                    name,
+                    f"Drake {label}, {note}",
+                    "—",
+                    _ms(r["median_s"]),
+                    speed(r["median_s"]),
+                    _sci(r.get("error_vs_gaitopt")),
+                    _sci(r.get("error_vs_reference")),
+                    "—",
+                ]
+            )
     return out
 
 
 _HEAD = [
-    "model", "method", "first call ms", "once built ms", "× vs baseline",
-    "|Δx| vs gaitopt", "err vs reference", "multipliers",
+    "model",
+    "method",
+    "first call ms",
+    "once built ms",
+    "× vs baseline",
+    "|Δx| vs gaitopt",
+    "err vs reference",
+    "multipliers",
 ]
 
 
@@ -538,7 +580,7 @@ def format_table(record: dict[str, Any]) -> str:
     widths = [max(len(r[i]) for r in table) for i in range(len(_HEAD))]
     lines = []
     for i, r in enumerate(table):
-        lines.append("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
+        lines.append("  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip())
         if i == 0:
             lines.append("  ".join("-" * w for w in widths))
     m = record["machine"]
@@ -573,6 +615,7 @@ def format_table(record: dict[str, Any]) -> str:
         lines.append(f"Drake peers skipped: {record['drake']['reason']}")
     g = record.get("goals") or {}
     if g:
+
         def verdict(ok: bool | None) -> str:
             return "n/a" if ok is None else ("met" if ok else "NOT met")
 
@@ -633,29 +676,55 @@ def main(argv: list[str] | None = None) -> int:
         prog="python -m gaitopt.bench",
         description="Time find_limit_cycle against a hand-written SciPy baseline and Drake.",
     )
-    parser.add_argument("--out", type=Path, default=Path("results/bench.json"),
-                        help="JSON file to write (default: results/bench.json)")
-    parser.add_argument("--repeats", type=int, default=5,
-                        help="fresh processes, baseline and Drake runs per model (default 5)")
-    parser.add_argument("--built-repeats", type=int, default=20,
-                        help="calls once built, verify=False (half that with verify=True)")
-    parser.add_argument("--models", nargs="+", metavar="NAME",
-                        help="only these models (default: every registered model)")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path("results/bench.json"),
+        help="JSON file to write (default: results/bench.json)",
+    )
+    parser.add_argument(
+        "--repeats",
+        type=int,
+        default=5,
+        help="fresh processes, baseline and Drake runs per model (default 5)",
+    )
+    parser.add_argument(
+        "--built-repeats",
+        type=int,
+        default=20,
+        help="calls once built, verify=False (half that with verify=True)",
+    )
+    parser.add_argument(
+        "--models",
+        nargs="+",
+        metavar="NAME",
+        help="only these models (default: every registered model)",
+    )
     parser.add_argument("--no-peers", action="store_true", help="skip Drake even if installed")
-    parser.add_argument("--quick", action="store_true",
-                        help="2 repeats, 5 calls once built, no Drake convergence runs")
+    parser.add_argument(
+        "--quick",
+        action="store_true",
+        help="2 repeats, 5 calls once built, no Drake convergence runs",
+    )
     args = parser.parse_args(argv)
     if args.repeats < 1 or args.built_repeats < 1:
-        parser.error(f"--repeats and --built-repeats must be ≥ 1, got "
-                     f"{args.repeats} and {args.built_repeats}")
+        parser.error(
+            f"--repeats and --built-repeats must be ≥ 1, got "
+            f"{args.repeats} and {args.built_repeats}"
+        )
     import gaitopt
 
     unknown = [n for n in args.models or [] if n not in gaitopt.REGISTRY]
     if unknown:
         parser.error(f"unknown model {unknown[0]!r}; available: {', '.join(gaitopt.REGISTRY)}")
     repeats, built = (2, 5) if args.quick else (args.repeats, args.built_repeats)
-    record = run(repeats=repeats, built_repeats=built, models=args.models,
-                 peers=not args.no_peers, converge=not args.quick)
+    record = run(
+        repeats=repeats,
+        built_repeats=built,
+        models=args.models,
+        peers=not args.no_peers,
+        converge=not args.quick,
+    )
     record["table"] = rows(record)
     _write_json(args.out, record)
     print(format_table(record))

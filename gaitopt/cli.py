@@ -25,7 +25,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import ctypes
-import difflib
 import json
 import math
 import os
@@ -36,7 +35,7 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from .errors import GuessError, ParameterError, StateError
+from .errors import GuessError, ParameterError, StateError, did_you_mean
 from .hybrid import HybridModel
 from .models import REGISTRY
 from .parameters import ParameterSpec, check_parameter
@@ -101,20 +100,6 @@ def _count(minimum: int) -> Callable[[str], int]:
     return parse
 
 
-def _suggestion(word: str, choices: Iterable[str]) -> str:
-    """``"did you mean 'x'? "`` for the choice closest to ``word``, or ``""``.
-
-    A whole name is compared first; then its ``_``-separated parts, so that ``walkr`` finds
-    ``simplest_walker``.
-    """
-    choices = list(choices)
-    close = difflib.get_close_matches(word, choices, n=1)
-    if not close:
-        parts = {part: choice for choice in choices for part in choice.split("_")}
-        close = [parts[p] for p in difflib.get_close_matches(word, parts, n=1, cutoff=0.75)]
-    return f"did you mean {close[0]!r}? " if close else ""
-
-
 def _split(option: str, item: str, examples: Mapping[str, str]) -> tuple[str, str]:
     """Split ``NAME=VALUE``; ``examples`` maps names to a valid ``NAME=VALUE`` for the hint."""
     name, sep, text = (part.strip() for part in item.partition("="))
@@ -160,7 +145,7 @@ def _model_class(name: str) -> type[HybridModel]:
     if name in REGISTRY:
         return REGISTRY[name]
     raise InputError(
-        f"MODEL {name!r} is not a model; {_suggestion(name, REGISTRY)}"
+        f"MODEL {name!r} is not a model; {did_you_mean(name, REGISTRY)}"
         f"available: {', '.join(REGISTRY)} (see `{PROG} list`)"
     )
 
@@ -172,7 +157,7 @@ def _parameter(model_name: str, specs: Mapping[str, ParameterSpec], item: str) -
     if name not in specs:
         raise InputError(
             f"--set {item}: {model_name} has no parameter {name!r}; "
-            f"{_suggestion(name, specs)}parameters: {', '.join(specs)} (see `{PROG} list`)"
+            f"{did_you_mean(name, specs)}parameters: {', '.join(specs)} (see `{PROG} list`)"
         )
     value = _number("--set", item, text, examples[name])
     try:
@@ -208,7 +193,7 @@ def _guess_hint(model: HybridModel, name: str) -> str:
     """What to do about a ``--guess`` name that is not a section coordinate."""
     if name in model.state_names:  # fixed by the section: say which names are free
         return f"; --guess takes the section coordinates {', '.join(model.section.coordinates)}"
-    close = _suggestion(name, model.section.coordinates).strip()
+    close = did_you_mean(name, model.section.coordinates).strip()
     return f"; {close}" if close else ""  # the library's message already lists the coordinates
 
 
@@ -246,7 +231,7 @@ def parse_x0(model: HybridModel, items: Sequence[str] | None) -> np.ndarray:
         if name not in states:
             raise InputError(
                 f"--x0 {item}: {model.name} has no state {name!r}; "
-                f"{_suggestion(name, states)}--x0 takes {takes}"
+                f"{did_you_mean(name, states)}--x0 takes {takes}"
             )
     x0 = {name: value for name, (_, value) in parsed.items()}
     try:

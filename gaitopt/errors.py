@@ -8,7 +8,31 @@ All input errors subclass :class:`ValueError` (as python-control's ``ControlDime
 
 from __future__ import annotations
 
-__all__ = ["GaitoptInputError", "UnknownModelError", "ParameterError", "StateError", "GuessError"]
+import difflib
+from collections.abc import Iterable
+
+__all__ = [
+    "GaitoptInputError",
+    "UnknownModelError",
+    "ParameterError",
+    "StateError",
+    "GuessError",
+    "did_you_mean",
+]
+
+
+def did_you_mean(word: str, choices: Iterable[str]) -> str:
+    """``"did you mean 'x'? "`` for the choice closest to ``word``, or ``""``.
+
+    The whole name is compared first, then its ``_``-separated parts, so that ``walkr`` finds
+    ``simplest_walker``.
+    """
+    choices = list(choices)
+    close = difflib.get_close_matches(word, choices, n=1)
+    if not close:
+        parts = {part: choice for choice in choices for part in choice.split("_")}
+        close = [parts[p] for p in difflib.get_close_matches(word, parts, n=1, cutoff=0.75)]
+    return f"did you mean {close[0]!r}? " if close else ""
 
 
 class GaitoptInputError(ValueError):

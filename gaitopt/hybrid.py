@@ -221,6 +221,11 @@ class HybridModel:
     def check(self) -> None:
         """Cross-parameter checks (raise :class:`~gaitopt.errors.ParameterError`)."""
 
+    def existence_note(self) -> str | None:
+        """What closed-form theory says about the main gait's existence at these parameters, if
+        anything is known (added to a failed search's message; never used to decide)."""
+        return None
+
     # -- derived -----------------------------------------------------------------------------
     @classmethod
     def parameter_specs(cls) -> tuple[ParameterSpec, ...]:
@@ -300,7 +305,9 @@ class HybridModel:
             raise StateError(f"{self.name}: section coordinates must be finite, got {vec}")
         return vec
 
-    def state_vector(self, state: Mapping[str, float] | Sequence[float], phase: int = 0) -> np.ndarray:
+    def state_vector(
+        self, state: Mapping[str, float] | Sequence[float], phase: int = 0
+    ) -> np.ndarray:
         """A full state of ``phase`` as a vector, from a complete mapping or sequence."""
         names = self.phases[phase].states
         if isinstance(state, Mapping):
@@ -316,7 +323,9 @@ class HybridModel:
         else:
             vec = np.asarray(state, dtype=float).ravel()
         if vec.size != len(names) or not np.all(np.isfinite(vec)):
-            raise StateError(f"{self.name}: a state needs {len(names)} finite values ({', '.join(names)})")
+            raise StateError(
+                f"{self.name}: a state needs {len(names)} finite values ({', '.join(names)})"
+            )
         return vec
 
     def section_coordinates_of(self, x: np.ndarray) -> np.ndarray:

@@ -59,4 +59,6 @@ def segment_trajectory_function(flow: ca.Function, steps: int) -> ca.Function:
     cols = [x]
     for _ in range(steps):
         cols.append(rk_step(flow, cols[-1], u, p, h))
-    return ca.Function("trajectory", [x, u, p, dt], [ca.horzcat(*cols)], ["x0", "u", "p", "dt"], ["X"])
+    return ca.Function(
+        "trajectory", [x, u, p, dt], [ca.horzcat(*cols)], ["x0", "u", "p", "dt"], ["X"]
+    )

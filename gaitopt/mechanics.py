@@ -91,9 +91,7 @@ def solve_small(A: ca.SX, b: ca.SX) -> ca.SX:
     return ca.solve(A, b)
 
 
-def impact_velocity(
-    masses: Sequence[PointMass], q: ca.SX, qd: ca.SX, contact: ca.SX
-) -> ca.SX:
+def impact_velocity(masses: Sequence[PointMass], q: ca.SX, qd: ca.SX, contact: ca.SX) -> ca.SX:
     """Post-impact generalised velocities for a plastic impact of point ``contact``.
 
     The stance foot is added as two free coordinates (floating base); before impact it is at rest.

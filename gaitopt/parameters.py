@@ -122,8 +122,9 @@ def check_parameter(model_name: str, spec: ParameterSpec, value: Any) -> float:
             ) from None
     value = float(value)
     if not math.isfinite(value) or not spec.contains(value):
+        unit = "" if spec.unit == "1" else f" {spec.unit}"
         raise ParameterError(
             f"{model_name}: parameter `{spec.name}` = {value:g} is out of range; valid: "
-            f"{spec.range_text()} {spec.unit}, default {spec.default:g}"
+            f"{spec.range_text()}{unit}, default {spec.default:g}"
         )
     return value

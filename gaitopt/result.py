@@ -141,7 +141,7 @@ class LimitCycle:
             "residual": _num(self.residual),
             "verified": bool(self.verified),
             "section_coordinates": list(self.section_coordinates),
-            "inputs": dict(zip(self.model.inputs, map(float, self.inputs))),
+            "inputs": dict(zip(self.model.inputs, map(float, self.inputs), strict=True)),
             "durations": [float(d) for d in self.durations],
             "verification_error": _num(self.verification_error),
             "discretisation_error": _num(self.discretisation_error),

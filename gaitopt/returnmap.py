@@ -117,10 +117,16 @@ def fixed_points_1d(
             continue
         if d[j] == 0 and j > 0 and d[j - 1] * d[j + 1] < 0:
             continue  # counted in the previous bracket
-        root = brentq(
-            lambda v: return_map(model, [v], inputs=inputs)[0] - v, grid[j], grid[j + 1],
-            xtol=1e-12,
-        ) if d[j] * d[j + 1] < 0 else grid[j]
+        root = (
+            brentq(
+                lambda v: return_map(model, [v], inputs=inputs)[0] - v,
+                grid[j],
+                grid[j + 1],
+                xtol=1e-12,
+            )
+            if d[j] * d[j + 1] < 0
+            else grid[j]
+        )
         name = model.section.coordinates[0]
         cycle = find_limit_cycle(model, {name: root}, inputs=inputs)
         if cycle.success:

@@ -84,7 +84,9 @@ class Transcription:
         s = ca.MX.sym("s", m)
         u = ca.MX.sym("u", len(model_cls.inputs))
         p = ca.MX.sym("p", len(model_cls.parameter_specs()))
-        segment = {i: segment_function(ph.flow, disc.steps).map(S) for i, ph in enumerate(self.phases)}
+        segment = {
+            i: segment_function(ph.flow, disc.steps).map(S) for i, ph in enumerate(self.phases)
+        }
         sampler = {
             i: segment_trajectory_function(ph.flow, disc.dense).map(S)
             for i, ph in enumerate(self.phases)
@@ -145,9 +147,11 @@ class Transcription:
         )
         GP = ca.vertcat(G, P)
         self.linearisation = ca.Function(
-            "linearisation", [w, u, p],
+            "linearisation",
+            [w, u, p],
             [ca.jacobian(GP, w), ca.jacobian(GP, u), F, x_return],
-            ["w", "u", "p"], ["J_w", "J_u", "F", "x_return"],
+            ["w", "u", "p"],
+            ["J_w", "J_u", "F", "x_return"],
         ).expand()
         K = S * disc.dense + 1  # dense samples per phase (segment starts shared)
         self.guard_maps = [
@@ -161,7 +165,8 @@ class Transcription:
             for ph in self.phases
         ]
         self.checks = ca.Function(
-            "checks", [w, u, p],
+            "checks",
+            [w, u, p],
             [ca.horzcat(*ends), ca.vertcat(*dg), ca.vertcat(*adm), ca.vertcat(*durations)],
         )
         self.sample = ca.Function("sample", [w, u, p], samples)
@@ -173,7 +178,7 @@ class Transcription:
         """Unknown vector from section coordinates, per-chain node arrays (n × S) and durations."""
         w = np.zeros(self.size)
         w[: self.m] = s
-        for kind, k, off, shape in self.layout:
+        for kind, k, off, _shape in self.layout:
             if kind == "nodes":
                 block = nodes[k][:, 1:] if k == 0 else nodes[k]
                 w[off : off + block.size] = block.ravel(order="F")
@@ -186,9 +191,18 @@ class Transcription:
         if self._ipopt is None:
             nlp = {"x": self._w, "p": ca.vertcat(self._u, self._p), "f": 0, "g": self._F}
             self._ipopt = ca.nlpsol(
-                "limit_cycle_ipopt", "ipopt", nlp,
-                {"ipopt.print_level": 0, "print_time": False, "ipopt.tol": 1e-14,
-                 "ipopt.constr_viol_tol": 1e-13, "ipopt.max_iter": 200, "error_on_fail": False},
+                "limit_cycle_ipopt",
+                "ipopt",
+                nlp,
+                {
+                    "ipopt.print_level": 0,
+                    "ipopt.sb": "yes",
+                    "print_time": False,
+                    "ipopt.tol": 1e-14,
+                    "ipopt.constr_viol_tol": 1e-13,
+                    "ipopt.max_iter": 200,
+                    "error_on_fail": False,
+                },
             )
         return self._ipopt
 
@@ -206,7 +220,9 @@ def _guard_rate(phase, transition) -> ca.Function:
 
 
 @lru_cache(maxsize=64)
-def transcription(model_cls: type[HybridModel], disc: MultipleShooting, cycles: int) -> Transcription:
+def transcription(
+    model_cls: type[HybridModel], disc: MultipleShooting, cycles: int
+) -> Transcription:
     """The cached :class:`Transcription` (parameters are symbolic, so one per model class)."""
     return Transcription(model_cls, disc, cycles)
 
@@ -280,10 +296,19 @@ def find_limit_cycle(
     p = model.p
 
     def fail(message: str, **extra: Any) -> LimitCycle:
+        note = model.existence_note()
+        if note:
+            message = f"{message} [{note}]"
         return LimitCycle(
-            False, message, model, steps=steps, state_names=model.state_names,
-            section_coordinates=model.section.coordinates, inputs=u,
-            solve_time=time.perf_counter() - start, **extra,
+            False,
+            message,
+            model,
+            steps=steps,
+            state_names=model.state_names,
+            section_coordinates=model.section.coordinates,
+            inputs=u,
+            solve_time=time.perf_counter() - start,
+            **extra,
         )
 
     # -- guess from a simulation ---------------------------------------------------------------
@@ -293,18 +318,27 @@ def find_limit_cycle(
     else:
         s0 = model.section_vector(guess if guess is not None else {})
     sim = simulate(
-        model, model.lift(s0), steps=steps, inputs=u, max_phase_time=_time_limit(model),
-        rtol=1e-8, atol=1e-9,  # a guess: Newton does the rest
+        model,
+        model.lift(s0),
+        steps=steps,
+        inputs=u,
+        max_phase_time=_time_limit(model),
+        rtol=1e-8,
+        atol=1e-9,  # a guess: Newton does the rest
     )
     if not sim.success:
-        where = ", ".join(f"{k}={v:.6g}" for k, v in zip(model.section.coordinates, s0))
+        where = ", ".join(
+            f"{k}={v:.6g}" for k, v in zip(model.section.coordinates, s0, strict=True)
+        )
         if explicit and not isinstance(guess, LimitCycle):
             raise GuessError(
                 f"{model.name}: `guess` {where} leads nowhere: {sim.message}; "
                 f"try another guess (e.g. from `gaitopt simulate {model.name}`)"
             )
-        return fail(f"no gait found: the simulation from {where} does not complete "
-                    f"{steps} step(s) ({sim.message}); the gait may not exist at these parameters")
+        return fail(
+            f"no gait found: the simulation from {where} does not complete "
+            f"{steps} step(s) ({sim.message}); the gait may not exist at these parameters"
+        )
     w0 = tr.pack(s0, *_nodes_from_simulation(sim, tr))
 
     # -- solve, then refine the mesh until the discretisation error is below tol ---------------
@@ -328,21 +362,27 @@ def find_limit_cycle(
     s_star = w[: tr.m]
     x_star = model.lift(s_star)
     common = dict(
-        residual=residual, iterations=iterations, durations=durations,
-        discretisation=disc, discretisation_error=disc_error,
+        residual=residual,
+        iterations=iterations,
+        durations=durations,
+        discretisation=disc,
+        discretisation_error=disc_error,
         period=float(np.sum(durations)),
-        fixed_point=dict(zip(model.state_names, map(float, x_star))),
+        fixed_point=dict(zip(model.state_names, map(float, x_star), strict=True)),
     )
     if not converged or not residual <= tol:
         return fail(
-            f"{method} did not converge (residual {residual:.3g} after {iterations} iterations; "
-            f"tolerance {tol:g}); try a guess closer to the gait"
-            + (" or method='ipopt'" if method == "newton" else ""),
+            f"no periodic orbit found near the guess: {method} stopped with residual "
+            f"{residual:.3g} after {iterations} iterations (tolerance {tol:g}); the gait may not "
+            f"exist at these parameters, or the guess is too far from it: try a closer guess"
+            + (" or the ipopt method" if method == "newton" else ""),
             **common,
         )
 
     # -- no false gaits ----------------------------------------------------------------------
-    problem = _check_orbit(model, tr, w, u, p, ends, dg.ravel(), adm.ravel(), durations, x_return, x_star)
+    problem = _check_orbit(
+        model, tr, w, u, p, ends, dg.ravel(), adm.ravel(), durations, x_return, x_star
+    )
     orbit = _orbit_arcs(model, tr, w, u, p, durations)
     if problem is None:
         problem = _check_dense(model, tr, orbit, u, p)
@@ -359,9 +399,8 @@ def find_limit_cycle(
     if verify:
         verified, error, vmessage = _verify(model, x_star, durations, steps, u, tol * 1e3)
     success = verified or not verify
-    accuracy = (
-        f"discretisation error {disc_error:.1g}"
-        + (f" (above tol {tol:g} after {refinements} refinements)" if disc_error > tol else "")
+    accuracy = f"discretisation error {disc_error:.1g}" + (
+        f" (above tol {tol:g} after {refinements} refinements)" if disc_error > tol else ""
     )
     message = (
         f"periodic orbit found (residual {residual:.2g}, {accuracy}); " + vmessage
@@ -404,7 +443,11 @@ def _solve(tr: Transcription, method: str, w0, u, p) -> tuple[np.ndarray, bool, 
     solver = tr.ipopt()
     sol = solver(x0=w0, p=np.concatenate([u, p]), lbg=0, ubg=0, lbx=lbx)
     stats = solver.stats()
-    return np.asarray(sol["x"], dtype=float).ravel(), bool(stats["success"]), int(stats["iter_count"])
+    return (
+        np.asarray(sol["x"], dtype=float).ravel(),
+        bool(stats["success"]),
+        int(stats["iter_count"]),
+    )
 
 
 def _newton_step(tr: Transcription, J_w: np.ndarray, F) -> np.ndarray:
@@ -424,7 +467,9 @@ def _time_limit(model: HybridModel) -> float:
     return float(getattr(model, "max_phase_time", 30.0))
 
 
-def _nodes_from_simulation(sim: Simulation, tr: Transcription) -> tuple[list[np.ndarray], list[float]]:
+def _nodes_from_simulation(
+    sim: Simulation, tr: Transcription
+) -> tuple[list[np.ndarray], list[float]]:
     """Segment start states and phase durations of the simulated orbit, in chain order."""
     S = tr.disc.segments
     nodes, durations = [], []
@@ -543,18 +588,26 @@ def _verify(model, x_star, durations, steps, u, tol) -> tuple[bool, float, str]:
         return False, float("inf"), f"the simulation from the fixed point fails: {sim.message}"
     expected = len(durations)
     if len(sim.arcs) != expected:
-        return False, float("inf"), (
-            f"the simulation passes {len(sim.arcs)} phases where the orbit has {expected}"
+        return (
+            False,
+            float("inf"),
+            (f"the simulation passes {len(sim.arcs)} phases where the orbit has {expected}"),
         )
     error = float(np.max(np.abs(sim.section_states[-1] - x_star)))
     sim_durations = np.array([a.t1 - a.t0 for a in sim.arcs])
     timing = float(np.max(np.abs(sim_durations - durations)))
     scale = 1 + float(np.max(np.abs(x_star)))
     if error > tol * scale or timing > tol * (1 + float(np.sum(durations))):
-        return False, error, (
-            f"the simulation from the fixed point returns {error:.3g} away (phase timing differs "
-            f"by {timing:.3g} s; tolerance {tol:g})"
+        return (
+            False,
+            error,
+            (
+                f"the simulation from the fixed point returns {error:.3g} away (phase timing "
+                f"differs by {timing:.3g} s; tolerance {tol:g})"
+            ),
         )
-    return True, error, (
-        f"verified by simulation: return error {error:.2g}, timing error {timing:.2g} s"
+    return (
+        True,
+        error,
+        (f"verified by simulation: return error {error:.2g}, timing error {timing:.2g} s"),
     )

@@ -317,8 +317,12 @@ def _integrate_phase(funcs: _PhaseFunctions, solver_cls, t0, x0, rtol, atol, max
         for k in range(n_tr):
             if armed[k] and values[k] < 0 <= new_values[k]:
                 t_hit = brentq(
-                    lambda tt, k=k: funcs.signed_guard(k, dense(tt)), t_old, t_new,
-                    xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200,
+                    lambda tt, k=k, dense=dense: funcs.signed_guard(k, dense(tt)),
+                    t_old,
+                    t_new,
+                    xtol=1e-15,
+                    rtol=4 * np.finfo(float).eps,
+                    maxiter=200,
                 )
                 x_hit = dense(t_hit)
                 if not funcs.admissible(k, x_hit):

@@ -139,16 +139,17 @@ def test_walker_gif_has_frames_and_steps_land_on_the_ground(compass, tmp_path):
     assert _hidden(tmp_path) == []  # the temporary file was moved into place
 
     # Each new contact point (the swing foot at heel strike) is on the ground line.
-    frames = walker_frames(model, sim, [a.t1 for a in sim.arcs])
-    contacts = np.array([f["contact"] for f in frames])
-    assert contacts[0].tolist() == [0.0, 0.0]
-    next_contact = (
-        contacts[0] + np.asarray(model.phases[0].points(sim.events[0].state_before, model.p))[:, 2]
-    )
+    strike = sim.events[0].state_before
+    next_contact = np.asarray(model.phases[0].points(strike, model.p))[:, 2]  # swing foot
     assert next_contact[0] > 0.3  # a step of about 2 l sin(0.27) forward (downhill)
     np.testing.assert_allclose(next_contact[1], -next_contact[0] * math.tan(model.slope), atol=1e-9)
-    last = walker_frames(model, sim, [sim.arcs[-1].t0])[0]["contact"]
-    np.testing.assert_allclose(last, next_contact, atol=1e-12)
+    # The second step's frames stand on it (the event instant itself still shows the first step).
+    second = sim.arcs[1]
+    during = walker_frames(model, sim, [0.5 * (second.t0 + second.t1)])[0]
+    np.testing.assert_allclose(during["contact"], next_contact, atol=1e-12)
+    first = walker_frames(model, sim, [sim.arcs[0].t1])[0]  # heel strike: still on the origin
+    assert first["contact"].tolist() == [0.0, 0.0]
+    np.testing.assert_allclose(first["outline"][:, 2], next_contact, atol=1e-9)
 
 
 def test_models_without_geometry_are_not_animated(tmp_path):

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..errors import UnknownModelError
+from ..errors import ParameterError, UnknownModelError, did_you_mean
 from ..hybrid import HybridModel
 from .compass_gait import CompassGait
 from .rimless_wheel import RimlessWheel
@@ -26,25 +26,17 @@ def model(name: str, **params: float) -> HybridModel:
     ParameterError
         If a parameter is unknown, not a number, or out of range.
     """
-    from ..errors import ParameterError
-
     if name not in REGISTRY:
-        import difflib
-
-        close = difflib.get_close_matches(name, REGISTRY, n=1)
-        hint = f"did you mean {close[0]!r}? " if close else ""
         raise UnknownModelError(
-            f"unknown model {name!r}; {hint}available: {', '.join(REGISTRY)}"
+            f"unknown model {name!r}; {did_you_mean(name, REGISTRY)}available: "
+            f"{', '.join(REGISTRY)}"
         )
     cls = REGISTRY[name]
     known = [s.name for s in cls.parameter_specs()]
     for key in params:
         if key not in known:
-            import difflib
-
-            close = difflib.get_close_matches(key, known, n=1)
-            hint = f"did you mean {close[0]!r}? " if close else ""
             raise ParameterError(
-                f"{name}: unknown parameter {key!r}; {hint}parameters: {', '.join(known)}"
+                f"{name}: unknown parameter {key!r}; {did_you_mean(key, known)}"
+                f"parameters: {', '.join(known)}"
             )
     return cls(**params)

@@ -22,8 +22,13 @@ from dataclasses import dataclass
 import casadi as ca
 
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
-from ..mechanics import bodies_function, kinetic_energy, lagrange_acceleration
-from ..mechanics import impact_velocity, potential_energy
+from ..mechanics import (
+    bodies_function,
+    impact_velocity,
+    kinetic_energy,
+    lagrange_acceleration,
+    potential_energy,
+)
 from ..parameters import parameter
 
 __all__ = ["CompassGait"]
@@ -55,20 +60,39 @@ class CompassGait(HybridModel):
         5.0, unit="kg", doc="leg point mass m", source=_DRAKE, low=0.0, high=1e4, low_open=True
     )
     a: float = parameter(
-        0.5, unit="m", doc="foot to leg mass distance", source=_DRAKE,
-        low=0.0, high=10.0, low_open=True,
+        0.5,
+        unit="m",
+        doc="foot to leg mass distance",
+        source=_DRAKE,
+        low=0.0,
+        high=10.0,
+        low_open=True,
     )
     b: float = parameter(
-        0.5, unit="m", doc="hip to leg mass distance", source=_DRAKE,
-        low=0.0, high=10.0, low_open=True,
+        0.5,
+        unit="m",
+        doc="hip to leg mass distance",
+        source=_DRAKE,
+        low=0.0,
+        high=10.0,
+        low_open=True,
     )
     gravity: float = parameter(
-        9.81, unit="m/s^2", doc="gravitational acceleration g", source="standard gravity",
-        low=0.0, high=100.0, low_open=True,
+        9.81,
+        unit="m/s^2",
+        doc="gravitational acceleration g",
+        source="standard gravity",
+        low=0.0,
+        high=100.0,
+        low_open=True,
     )
     slope: float = parameter(
-        0.0525, unit="rad", doc="ground slope γ (downhill positive)", source=_DRAKE,
-        low=0.0, high=0.5,
+        0.0525,
+        unit="rad",
+        doc="ground slope γ (downhill positive)",
+        source=_DRAKE,
+        low=0.0,
+        high=0.5,
     )
 
     @classmethod
@@ -76,9 +100,7 @@ class CompassGait(HybridModel):
         x, (stance, swing, stance_dot, swing_dot) = sym.states(
             "stance", "swing", "stance_dot", "swing_dot"
         )
-        mh, m, a, b, g, gamma = (
-            sym.mass_hip, sym.mass_leg, sym.a, sym.b, sym.gravity, sym.slope
-        )
+        mh, m, a, b, g, gamma = (sym.mass_hip, sym.mass_leg, sym.a, sym.b, sym.gravity, sym.slope)
         legs = a + b
         q = ca.vertcat(stance, swing)
         qd = ca.vertcat(stance_dot, swing_dot)

@@ -35,29 +35,50 @@ class RimlessWheel(HybridModel):
     reference = "McGeer 1990; Coleman, Chatterjee & Ruina 1997; Tedrake, Underactuated Robotics"
 
     spokes: float = parameter(
-        8, unit="1", doc="number of spokes", source="Drake RimlessWheel default",
-        low=3, high=64, integer=True,
+        8,
+        unit="1",
+        doc="number of spokes",
+        source="Drake RimlessWheel default",
+        low=3,
+        high=64,
+        integer=True,
     )
     length: float = parameter(
-        1.0, unit="m", doc="spoke length l", source="Drake RimlessWheel default",
-        low=0.0, high=100.0, low_open=True,
+        1.0,
+        unit="m",
+        doc="spoke length l",
+        source="Drake RimlessWheel default",
+        low=0.0,
+        high=100.0,
+        low_open=True,
     )
     gravity: float = parameter(
-        9.81, unit="m/s^2", doc="gravitational acceleration g", source="standard gravity",
-        low=0.0, high=100.0, low_open=True,
+        9.81,
+        unit="m/s^2",
+        doc="gravitational acceleration g",
+        source="standard gravity",
+        low=0.0,
+        high=100.0,
+        low_open=True,
     )
     slope: float = parameter(
-        0.08, unit="rad", doc="ground slope γ (downhill positive)",
+        0.08,
+        unit="rad",
+        doc="ground slope γ (downhill positive)",
         source="Drake RimlessWheel default: produces standing and rolling fixed points",
-        low=0.0, high=1.0, high_open=True,
+        low=0.0,
+        high=1.0,
+        high_open=True,
     )
 
     def check(self) -> None:
         alpha = math.pi / self.spokes
         if self.slope >= alpha:
+            most = int(math.pi / self.slope) if self.slope > 0 else 64
             raise ParameterError(
                 f"rimless_wheel: parameter `slope` = {self.slope:g} must be below π/spokes = "
-                f"{alpha:.4g} rad (else no spoke stays behind the contact); try slope=0.08"
+                f"{alpha:.4g} rad with spokes = {self.spokes:g} (else the wheel cannot stand); "
+                f"use a smaller slope or at most {most} spokes"
             )
 
     def __post_init__(self) -> None:
@@ -67,9 +88,9 @@ class RimlessWheel(HybridModel):
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
         x, (theta, theta_dot) = sym.states("theta", "theta_dot")
-        g, l, gamma = sym.gravity, sym.length, sym.slope
+        g, length, gamma = sym.gravity, sym.length, sym.slope
         alpha = ca.pi / sym.spokes
-        flow = sym.function("flow", x, ca.vertcat(theta_dot, g / l * ca.sin(theta)))
+        flow = sym.function("flow", x, ca.vertcat(theta_dot, g / length * ca.sin(theta)))
         forward = Transition(
             name="forward step",
             guard=sym.function("guard", x, theta - (gamma + alpha)),  # θ = γ + α
@@ -92,20 +113,26 @@ class RimlessWheel(HybridModel):
             doc="uphill spoke strikes at θ = γ − α; θ⁺ = θ + 2α, θ̇⁺ = cos(2α) θ̇",
         )
         energy = sym.conserved(
-            "energy", x, 0.5 * l**2 * theta_dot**2 + g * l * ca.cos(theta)
+            "energy", x, 0.5 * length**2 * theta_dot**2 + g * length * ca.cos(theta)
         )  # per unit mass (J/kg)
         # Points for drawing, world frame (x downhill-horizontal, y up), contact foot at 0.
-        hub = l * ca.vertcat(ca.sin(theta), ca.cos(theta))
+        hub = length * ca.vertcat(ca.sin(theta), ca.cos(theta))
         spoke_angles = [theta - 2 * alpha * k for k in range(2)]
-        feet = [hub - l * ca.vertcat(ca.sin(a), ca.cos(a)) for a in spoke_angles]
+        feet = [hub - length * ca.vertcat(ca.sin(a), ca.cos(a)) for a in spoke_angles]
         points = ca.Function("points", [x, sym.p], [ca.horzcat(hub, feet[0], feet[1])])
         phase = Phase(
-            "stance", ("theta", "theta_dot"), flow, (forward, backward), {"energy": energy},
-            points=points, point_names=("hub", "foot", "next_foot"),
+            "stance",
+            ("theta", "theta_dot"),
+            flow,
+            (forward, backward),
+            {"energy": energy},
+            points=points,
+            point_names=("hub", "foot", "next_foot"),
         )
         s = ca.SX.sym("s", 1)
         section = Section(
-            ("theta_dot",), sym.lift(s, ca.vertcat(gamma - alpha, s)),
+            ("theta_dot",),
+            sym.lift(s, ca.vertcat(gamma - alpha, s)),
             "just after a forward impact: theta = slope − π/spokes",
         )
         return (phase,), section
@@ -118,8 +145,8 @@ class RimlessWheel(HybridModel):
 
     def rolling_speed(self) -> float:
         """Closed-form rolling fixed point ``ω* = cot 2α · sqrt(4 g/l sin α sin γ)`` (rad/s)."""
-        a, g, l, gamma = self.alpha, self.gravity, self.length, self.slope
-        return math.sqrt(4 * g / l * math.sin(a) * math.sin(gamma)) / math.tan(2 * a)
+        a, g, gamma = self.alpha, self.gravity / self.length, self.slope
+        return math.sqrt(4 * g * math.sin(a) * math.sin(gamma)) / math.tan(2 * a)
 
     def vaulting_speed(self) -> float:
         """``ω₁ = sqrt(2 g/l (1 − cos(γ − α)))``: least post-impact rate that vaults the hub
@@ -131,8 +158,19 @@ class RimlessWheel(HybridModel):
         ``ω⁺ₙ₊₁ = cos 2α · sqrt(ω⁺ₙ² + 4 g/l sin α sin γ)``; NaN where the wheel cannot vault."""
         if theta_dot <= self.vaulting_speed():
             return math.nan
-        a, g, l, gamma = self.alpha, self.gravity, self.length, self.slope
-        return math.cos(2 * a) * math.sqrt(theta_dot**2 + 4 * g / l * math.sin(a) * math.sin(gamma))
+        a, g, gamma = self.alpha, self.gravity / self.length, self.slope
+        return math.cos(2 * a) * math.sqrt(theta_dot**2 + 4 * g * math.sin(a) * math.sin(gamma))
+
+    def existence_note(self) -> str | None:
+        """Rolling exists only where the closed-form ω* exceeds the vaulting rate ω₁."""
+        omega, omega1 = self.rolling_speed(), self.vaulting_speed()
+        if omega > omega1:
+            return None
+        return (
+            f"closed form: rolling needs ω* = {omega:.4g} rad/s above the vaulting rate ω₁ = "
+            f"{omega1:.4g} rad/s; at slope {self.slope:g} the wheel comes to rest instead "
+            f"(Tedrake, Underactuated Robotics, rimless wheel)"
+        )
 
     def default_start(self) -> dict[str, float]:
         """Twice the vaulting rate ω₁: rolls on, and converges to rolling where it exists."""

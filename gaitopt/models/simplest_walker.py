@@ -38,9 +38,13 @@ class SimplestWalker(HybridModel):
     reference = "Garcia, Chatterjee, Ruina & Coleman 1998"
 
     slope: float = parameter(
-        0.009, unit="rad", doc="ground slope γ",
+        0.009,
+        unit="rad",
+        doc="ground slope γ",
         source="Garcia et al. 1998, the slope of their tabulated gaits",
-        low=0.0, high=0.05, low_open=True,
+        low=0.0,
+        high=0.05,
+        low_open=True,
     )
 
     @classmethod
@@ -85,8 +89,11 @@ class SimplestWalker(HybridModel):
             "points", [x, sym.p], [rot @ ca.horzcat(ca.DM.zeros(2, 1), hip, swing_foot)]
         )
         bodies = ca.Function(
-            "bodies", [x, sym.p], [ca.DM(1.0), rot @ hip, rot @ hip_velocity],
-            ["x", "p"], ["m", "r", "v"],
+            "bodies",
+            [x, sym.p],
+            [ca.DM(1.0), rot @ hip, rot @ hip_velocity],
+            ["x", "p"],
+            ["m", "r", "v"],
         )
         phase = Phase(
             "single support",
@@ -99,9 +106,12 @@ class SimplestWalker(HybridModel):
             bodies=bodies,
         )
         s, (s_theta, s_theta_dot) = sym.states("theta", "theta_dot")
-        lift = ca.vertcat(s_theta, 2 * s_theta, s_theta_dot, (1 - ca.cos(2 * s_theta)) * s_theta_dot)
+        lift = ca.vertcat(
+            s_theta, 2 * s_theta, s_theta_dot, (1 - ca.cos(2 * s_theta)) * s_theta_dot
+        )
         section = Section(
-            ("theta", "theta_dot"), sym.lift(s, lift),
+            ("theta", "theta_dot"),
+            sym.lift(s, lift),
             "just after heel strike: phi = 2·theta, phi_dot = (1 − cos 2θ)·theta_dot",
         )
         return (phase,), section

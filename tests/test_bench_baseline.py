@@ -1,0 +1,75 @@
+"""The hand-written baseline of ``make bench`` is a valid comparison: it finds the published
+gaits on its own (no gaitopt machinery), and the benchmark's record is well formed.  No timing
+is asserted anywhere."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+
+import gaitopt
+from gaitopt import _bench_baselines as baselines
+from gaitopt import bench
+
+
+def _solve(name: str, start=None) -> baselines.BaselineResult:
+    m = gaitopt.model(name)
+    hw = baselines.baseline(name, m.params)
+    result = baselines.solve(hw, m.section_vector({}) if start is None else np.asarray(start))
+    assert result.success, result.message
+    return result
+
+
+def test_compass_gait_baseline_reproduces_design_fixed_point():
+    # Source: DESIGN.md, "Reference numbers" — compass gait at the defaults (agrees with Drake's
+    # CompassGait simulated to convergence); given to 7 digits, so 1e-7.
+    r = _solve("compass_gait")
+    expected = [-0.2187746, 0.3237746, 1.0928668, 0.3761346]
+    assert np.allclose(r.x, expected, rtol=0, atol=1e-7)
+    assert math.isclose(r.period, 0.7344606, abs_tol=1e-7)
+    assert max(abs(r.multipliers)) < 1  # the passive gait is stable
+
+
+def test_rimless_wheel_baseline_reproduces_closed_form():
+    # Source: Tedrake, Underactuated Robotics, §rimless wheel: ω* = cot 2α sqrt(4 g/l sin α sin γ)
+    # (1.095462839648 rad/s at the defaults, DESIGN.md); map slope cos² 2α = 0.5 for 8 spokes.
+    m = gaitopt.model("rimless_wheel")
+    r = _solve("rimless_wheel")
+    assert math.isclose(r.fixed_point["theta_dot"], m.rolling_speed(), abs_tol=1e-9)
+    assert math.isclose(r.fixed_point["theta_dot"], 1.095462839648, abs_tol=1e-9)
+    assert math.isclose(r.multipliers[0].real, math.cos(2 * m.alpha) ** 2, abs_tol=1e-5)
+
+
+def test_simplest_walker_baseline_reproduces_garcia():
+    # Source: Garcia, Chatterjee, Ruina & Coleman 1998, γ = 0.009, long-step gait.
+    r = _solve("simplest_walker")
+    assert math.isclose(r.fixed_point["theta"], 0.20031090049483, abs_tol=1e-8)
+    assert math.isclose(r.fixed_point["theta_dot"], -0.19983247291764, abs_tol=1e-8)
+
+
+def test_vanderpol_baseline_period():
+    # Source: Hairer, Nørsett & Wanner, Solving ODEs I: period 6.6632868593231301897 at μ = 1.
+    r = _solve("vanderpol")
+    assert math.isclose(r.period, 6.6632868593231301897, abs_tol=1e-8)
+
+
+def test_models_without_a_baseline_are_skipped():
+    assert baselines.baseline("no_such_model", {}) is None
+
+
+def test_bench_record_and_table(tmp_path):
+    record = bench.run(
+        repeats=1, built_repeats=1, models=["rimless_wheel"], peers=False, log=lambda s: None
+    )
+    record["table"] = bench.rows(record)
+    out = tmp_path / "bench.json"
+    bench._write_json(out, record)
+    data = json.loads(out.read_text())
+    entry = data["models"]["rimless_wheel"]
+    assert entry["first_call"]["verify_false"]["runs"], entry["first_call"]
+    assert entry["baseline"]["error_vs_gaitopt"] < 1e-8
+    assert data["machine"]["cpu_count"] >= 1 and data["drake"]["available"] is False
+    text = bench.format_table(record)
+    assert "solve_ivp + fsolve" in text and "rimless_wheel" in text
