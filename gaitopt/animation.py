@@ -130,15 +130,17 @@ def animate_walker(
     path: str | os.PathLike,
     fps: int = 30,
     *,
-    max_frames: int = 120,
+    max_frames: int = 150,
     dpi: int = 70,
 ) -> Path:
     """Write a GIF of the walker moving down its slope over the simulated steps.
 
-    Frames are taken at real-time instants ``t₀ + k/fps`` (the model's time unit counted as
-    seconds; dimensionless for Garcia's simplest walker), so the GIF plays in real time.  If that
-    needs more than ``max_frames`` frames the frames are spread evenly over the motion instead and
-    the title says how much faster than real time it plays.  The view is fixed and wide enough for
+    Frames are taken at real-time instants ``t₀ + k·Δ`` (the model's time unit counted as
+    seconds; dimensionless for Garcia's simplest walker), where ``Δ`` is the frame delay the GIF
+    actually stores — ``1/fps`` rounded down to whole centiseconds, as Pillow writes it (30 fps:
+    30 ms) — so the GIF plays in real time.  If that needs more than ``max_frames`` frames the
+    frames are spread evenly over the motion instead and the title says how much faster than real
+    time it plays.  The view is fixed and wide enough for
     the whole motion; the ground is the line ``y = −x·tan(slope)`` through the first contact.
 
     Parameters
@@ -150,9 +152,9 @@ def animate_walker(
     path : str or os.PathLike
         Output GIF; written whole or not at all (temporary file, then :func:`os.replace`).
     fps : int
-        Frames per second of playback.
+        Frames per second of playback, 1 to 50 (GIF viewers slow down shorter delays).
     max_frames : int
-        Upper bound on the number of frames.
+        Upper bound on the number of frames (~150 frames at 70 dpi is about 0.7 MB).
     dpi : int
         Resolution (the figure is 6 × 3.2 inches: 420 × 224 pixels at 70 dpi).
 
@@ -164,22 +166,23 @@ def animate_walker(
     Raises
     ------
     GaitoptInputError
-        If a phase has no drawing points (Van der Pol), the simulation is empty, or ``fps`` or
-        ``max_frames`` is not a positive integer (``max_frames`` ≥ 2).
+        If a phase has no drawing points (Van der Pol), the simulation is empty, ``fps`` is not
+        an integer in 1..50, or ``max_frames`` is not an integer ≥ 2.
     """
-    if int(fps) != fps or fps < 1:
-        raise GaitoptInputError(f"`fps` must be a positive integer, got {fps!r}")
+    if int(fps) != fps or not 1 <= fps <= 50:
+        raise GaitoptInputError(f"`fps` must be an integer from 1 to 50, got {fps!r}")
     if int(max_frames) != max_frames or max_frames < 2:
         raise GaitoptInputError(f"`max_frames` must be an integer ≥ 2, got {max_frames!r}")
     _check_drawable(model, simulation)
     path = Path(path)
     t0, t1 = simulation.arcs[0].t0, simulation.arcs[-1].t1
-    real_time = t0 + np.arange(int(math.floor((t1 - t0) * fps)) + 1) / fps
+    delay = int(1000 / fps) // 10 / 100  # s: PillowWriter's ms, stored by GIF in centiseconds
+    real_time = t0 + delay * np.arange(int(math.floor((t1 - t0) / delay)) + 1)
     if len(real_time) <= max_frames:
         times, speed = real_time, 1.0
     else:
         times = np.linspace(t0, t1, int(max_frames))
-        speed = (times[1] - times[0]) * fps
+        speed = (times[1] - times[0]) / delay
     frames = walker_frames(model, simulation, times)
 
     # A fixed view around everything drawn.

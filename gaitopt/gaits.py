@@ -15,6 +15,8 @@ from the model's default start and write, under ``OUT/<model>/``,
 * ``return_map.png`` — for 1-D sections, the staircase plot of the return map (the rimless
   wheel's closed-form map overlaid).
 
+When the search fails only ``cycle.json`` is written (and figures of an earlier run removed).
+
 Every file is written whole or not at all (a temporary file in the same directory, then
 :func:`os.replace`).  A summary table ends the run.  Exit status: 0 when every model was solved and
 drawn, 1 when a model failed to solve or a figure failed (the error is printed; the other models
@@ -49,6 +51,7 @@ __all__ = ["main", "run_model", "write_json", "return_map_interval"]
 
 WALK_STEPS = 4  # simulated steps in walking.gif
 TRANSIENT_STEPS = 8  # simulated steps overlaid on the phase portrait
+FIGURES = ("phase_portrait.png", "return_map.png", "walking.gif")
 
 
 def write_json(data: Any, path: str | os.PathLike) -> Path:
@@ -104,6 +107,8 @@ def run_model(name: str, out: Path) -> tuple[LimitCycle, list[str], list[str]]:
     write_json(cycle.as_dict(), folder / "cycle.json")
     written, errors = ["cycle.json"], []
     if not cycle.success:
+        for stale in FIGURES:  # pictures of an earlier run would contradict cycle.json
+            (folder / stale).unlink(missing_ok=True)
         return cycle, written, errors
 
     def attempt(filename: str, draw) -> None:

@@ -136,6 +136,7 @@ def test_walker_gif_has_frames_and_steps_land_on_the_ground(compass, tmp_path):
     with Image.open(path) as im:
         assert im.format == "GIF"
         assert im.n_frames == 6  # 1.47 s at 10 fps needs 15 frames: capped at max_frames
+        assert im.info["duration"] == 100  # ms between frames (1/fps)
     assert _hidden(tmp_path) == []  # the temporary file was moved into place
 
     # Each new contact point (the swing foot at heel strike) is on the ground line.
@@ -175,6 +176,24 @@ def test_gaits_runner_writes_cycle_json_atomically(tmp_path, capsys):
     assert names == ["cycle.json", "phase_portrait.png", "return_map.png", "walking.gif"]
     assert _hidden(tmp_path) == []  # no temporary file left behind
     assert "rimless_wheel" in out.splitlines()[-1] and "True" in out.splitlines()[-1]
+
+
+def test_gaits_runner_reports_a_failed_search(tmp_path, capsys, monkeypatch):
+    import gaitopt.gaits
+
+    def fail(model):
+        message = "newton did not converge (test)"
+        return gaitopt.LimitCycle(False, message, model, inputs=model.zero_input())
+
+    stale = tmp_path / "compass_gait" / "phase_portrait.png"
+    stale.parent.mkdir()
+    stale.write_bytes(b"from an earlier run")
+    monkeypatch.setattr(gaitopt.gaits, "find_limit_cycle", fail)
+    assert gaits_main(["--out", str(tmp_path), "--models", "compass_gait"]) == 1
+    data = json.loads((tmp_path / "compass_gait" / "cycle.json").read_text())
+    assert data["success"] is False and data["message"] == "newton did not converge (test)"
+    assert sorted(p.name for p in stale.parent.iterdir()) == ["cycle.json"]
+    assert "NOT SOLVED" in capsys.readouterr().out
 
 
 def test_gaits_runner_rejects_unknown_models(tmp_path, capsys):

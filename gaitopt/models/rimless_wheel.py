@@ -154,12 +154,22 @@ class RimlessWheel(HybridModel):
         return math.sqrt(2 * self.gravity / self.length * (1 - math.cos(self.slope - self.alpha)))
 
     def closed_form_map(self, theta_dot: float) -> float:
-        """Post-impact rate after the next forward step, by energy and angular momentum:
-        ``ω⁺ₙ₊₁ = cos 2α · sqrt(ω⁺ₙ² + 4 g/l sin α sin γ)``; NaN where the wheel cannot vault."""
-        if theta_dot <= self.vaulting_speed():
-            return math.nan
+        """Post-impact rate at the next return to the section, by energy through the swing and
+        angular momentum about the new contact through each impact.
+
+        * ``ω > ω₁``: the hub vaults, ``ω⁺ₙ₊₁ = cos 2α · sqrt(ω⁺ₙ² + 4 g/l sin α sin γ)``;
+        * ``0 < ω < ω₁``: it rocks back, the uphill spoke strikes with ``−ω``, the wheel swings
+          back onto the downhill spoke: ``ω⁺ₙ₊₁ = cos² 2α · ω`` (valid while the backward swing,
+          ``cos 2α · ω``, cannot vault backwards over the uphill spoke);
+        * otherwise NaN.
+        """
         a, g, gamma = self.alpha, self.gravity / self.length, self.slope
-        return math.cos(2 * a) * math.sqrt(theta_dot**2 + 4 * g * math.sin(a) * math.sin(gamma))
+        if theta_dot > self.vaulting_speed():
+            return math.cos(2 * a) * math.sqrt(theta_dot**2 + 4 * g * math.sin(a) * math.sin(gamma))
+        backward_vault = math.sqrt(2 * g * (1 - math.cos(gamma + a)))
+        if 0 < theta_dot and math.cos(2 * a) * theta_dot < backward_vault:
+            return math.cos(2 * a) ** 2 * theta_dot
+        return math.nan
 
     def existence_note(self) -> str | None:
         """Rolling exists only where the closed-form ω* exceeds the vaulting rate ω₁."""
