@@ -125,16 +125,15 @@ def plot_phase_portrait(
     colours = {q: f"C{i % 10}" for i, q in enumerate(names)}
 
     # The orbit: one solid line per coordinate and arc.
+    labelled: set[str] = set()
     for arc in arcs:
         for q in coordinate_pairs(arc.states):
             i, j = arc.states.index(q), arc.states.index(q + _RATE_SUFFIX)
-            first = all(q not in coordinate_pairs(a.states) for a in arcs[: arcs.index(arc)])
-            ax.plot(
-                arc.x[i], arc.x[j], color=colours[q], lw=1.8, label=q if first else None, zorder=3
-            )
+            label = None if q in labelled else q
+            labelled.add(q)
+            ax.plot(arc.x[i], arc.x[j], color=colours[q], lw=1.8, label=label, zorder=3)
 
     # Resets: dashed jumps from each arc's end to the next arc's start.
-    jump_label = "reset (impact)"
     for k, arc in enumerate(arcs):
         nxt = arcs[(k + 1) % len(arcs)]
         tr = _transition(model, arc.phase, arc.transition)
@@ -152,14 +151,10 @@ def plot_phase_portrait(
                 continue
             ax.plot(*np.c_[before, after], color=colours[q], lw=1.2, ls="--", zorder=2)
             ax.scatter(*before, s=28, facecolors="white", edgecolors=colours[q], zorder=4)
-            ax.scatter(
-                *after,
-                s=28,
-                color=colours[q],
-                zorder=4,
-                label=jump_label if tr is not None and tr.impact else "reset",
-            )
-            jump_label = None
+            kind = "reset (impact)" if tr is None or tr.impact else "reset"
+            label = None if kind in labelled else kind
+            labelled.add(kind)
+            ax.scatter(*after, s=28, color=colours[q], zorder=4, label=label)
 
     if simulation is not None:
         _plot_transient(ax, model, simulation, names)

@@ -80,6 +80,16 @@ def test_phase_portrait_overlays_one_transient_line_per_coordinate(compass):
     assert np.isnan(grey[0].get_xdata()).sum() == len(sim.arcs)  # broken at every reset
 
 
+def test_phase_portrait_of_a_two_step_orbit_draws_every_arc_and_impact():
+    # The rimless wheel's gait solved as a period-2 orbit: two arcs, two impacts, one coordinate.
+    cycle = gaitopt.find_limit_cycle(gaitopt.model("rimless_wheel"), steps=2)
+    assert cycle.success, cycle.message
+    _, ax = plot_phase_portrait(cycle)
+    assert len(cycle.orbit) == 2 and len(ax.get_lines()) == 2 + 2
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels == ["theta", "reset (impact)"]
+
+
 def test_phase_portrait_refuses_a_failed_search():
     failed = gaitopt.LimitCycle(False, "did not converge", gaitopt.model("compass_gait"))
     with pytest.raises(GaitoptInputError, match="success=False"):
