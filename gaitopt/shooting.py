@@ -20,7 +20,7 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from typing import Any
 
 import casadi as ca
@@ -36,6 +36,7 @@ from .stability import is_stable, section_jacobians
 __all__ = ["MultipleShooting", "find_limit_cycle"]
 
 _METHODS = ("newton", "ipopt")
+_NEWTON = {"error_on_fail": False, "abstol": 1e-12, "abstolStep": 1e-15, "max_iter": 30}
 
 
 @dataclass(frozen=True)
@@ -135,43 +136,86 @@ class Transcription:
         F = ca.vertcat(G, P - s)  # periodicity closes the cycle
         assert F.shape[0] == self.size, "shooting system must be square"
 
-        # Expanded to SX: the small dense graphs evaluate several times faster than MX.
-        self.residual = ca.Function("residual", [w, u, p], [F], ["w", "u", "p"], ["F"]).expand()
-        newton = {"error_on_fail": False, "abstol": 1e-12, "abstolStep": 1e-15, "max_iter": 30}
-        # Plain Newton first (quadratic from a simulated guess); with line search as a fallback.
-        self.newton = ca.rootfinder(
-            "limit_cycle", "newton", self.residual, {**newton, "line_search": False}
+        self._w, self._u, self._p, self._F = w, u, p, F
+        self._GP, self._x_return = ca.vertcat(G, P), x_return
+        self._checks_out = [
+            ca.horzcat(*ends),
+            ca.vertcat(*dg),
+            ca.vertcat(*adm),
+            ca.vertcat(*durations),
+        ]
+        self._samples = samples
+
+    # Each function is built on first use: a mesh used only for the error estimate needs just
+    # its residual.  Expanded to SX where evaluated often: small dense graphs run faster so.
+    @cached_property
+    def residual(self) -> ca.Function:
+        """``F(w, u, p)``: all shooting equations."""
+        return ca.Function(
+            "residual", [self._w, self._u, self._p], [self._F], ["w", "u", "p"], ["F"]
+        ).expand()
+
+    @cached_property
+    def newton(self) -> ca.Function:
+        """Plain Newton (quadratic from a simulated guess)."""
+        return ca.rootfinder(
+            "limit_cycle", "newton", self.residual, {**_NEWTON, "line_search": False}
         )
-        self.newton_line_search = ca.rootfinder(
-            "limit_cycle_ls", "newton", self.residual, {**newton, "max_iter": 100}
+
+    @cached_property
+    def newton_line_search(self) -> ca.Function:
+        """Newton with line search: the fallback from a poor guess."""
+        return ca.rootfinder(
+            "limit_cycle_ls", "newton", self.residual, {**_NEWTON, "max_iter": 100}
         )
-        GP = ca.vertcat(G, P)
-        self.linearisation = ca.Function(
+
+    @cached_property
+    def linearisation(self) -> ca.Function:
+        """``(∂[G; P]/∂w, ∂[G; P]/∂u, F, x_return)`` for the multipliers and the error estimate."""
+        w, u, p, GP = self._w, self._u, self._p, self._GP
+        return ca.Function(
             "linearisation",
             [w, u, p],
-            [ca.jacobian(GP, w), ca.jacobian(GP, u), F, x_return],
+            [ca.jacobian(GP, w), ca.jacobian(GP, u), self._F, self._x_return],
             ["w", "u", "p"],
             ["J_w", "J_u", "F", "x_return"],
         ).expand()
-        K = S * disc.dense + 1  # dense samples per phase (segment starts shared)
-        self.guard_maps = [
+
+    @cached_property
+    def checks(self) -> ca.Function:
+        """Phase-end states, guard rates, admissibility and durations."""
+        return ca.Function("checks", [self._w, self._u, self._p], self._checks_out)
+
+    @cached_property
+    def sample(self) -> ca.Function:
+        """Dense samples of every phase."""
+        return ca.Function("sample", [self._w, self._u, self._p], self._samples)
+
+    @cached_property
+    def guard_maps(self) -> list[list[tuple[ca.Function, ca.Function | None]]]:
+        """Guards and admissibility mapped over one phase's dense samples."""
+        K = self.disc.segments * self.disc.dense + 1  # segment starts shared
+        return [
             [
-                (
-                    tr_.guard.map(K),
-                    tr_.admissible.map(K) if tr_.admissible is not None else None,
-                )
-                for tr_ in ph.transitions
+                (tr.guard.map(K), tr.admissible.map(K) if tr.admissible is not None else None)
+                for tr in phase.transitions
             ]
-            for ph in self.phases
+            for phase in self.phases
         ]
-        self.checks = ca.Function(
-            "checks",
-            [w, u, p],
-            [ca.horzcat(*ends), ca.vertcat(*dg), ca.vertcat(*adm), ca.vertcat(*durations)],
-        )
-        self.sample = ca.Function("sample", [w, u, p], samples)
-        self._w, self._u, self._p, self._F = w, u, p, F
-        self._ipopt = None
+
+    @cached_property
+    def _ipopt_solver(self) -> ca.Function:
+        nlp = {"x": self._w, "p": ca.vertcat(self._u, self._p), "f": 0, "g": self._F}
+        options = {
+            "ipopt.print_level": 0,
+            "ipopt.sb": "yes",
+            "print_time": False,
+            "ipopt.tol": 1e-14,
+            "ipopt.constr_viol_tol": 1e-13,
+            "ipopt.max_iter": 200,
+            "error_on_fail": False,
+        }
+        return ca.nlpsol("limit_cycle_ipopt", "ipopt", nlp, options)
 
     # -- packing ------------------------------------------------------------------------------
     def pack(self, s: np.ndarray, nodes: list[np.ndarray], durations: list[float]) -> np.ndarray:
@@ -188,23 +232,7 @@ class Transcription:
 
     def ipopt(self) -> ca.Function:
         """IPOPT on the feasibility problem ``F(w) = 0`` with positive durations."""
-        if self._ipopt is None:
-            nlp = {"x": self._w, "p": ca.vertcat(self._u, self._p), "f": 0, "g": self._F}
-            self._ipopt = ca.nlpsol(
-                "limit_cycle_ipopt",
-                "ipopt",
-                nlp,
-                {
-                    "ipopt.print_level": 0,
-                    "ipopt.sb": "yes",
-                    "print_time": False,
-                    "ipopt.tol": 1e-14,
-                    "ipopt.constr_viol_tol": 1e-13,
-                    "ipopt.max_iter": 200,
-                    "error_on_fail": False,
-                },
-            )
-        return self._ipopt
+        return self._ipopt_solver
 
     def duration_index(self) -> list[int]:
         """Positions of the durations in ``w``."""
