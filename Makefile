@@ -20,6 +20,12 @@ gaits: $(STAMP)
 test: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q
 
+studies: $(STAMP)
+	@set -e; for script in problems/*.py; do \
+	  [ -e "$$script" ] || { echo "no studies yet (problems/ is empty)"; break; }; \
+	  echo "== $$script"; MPLBACKEND=Agg $(BIN)/python "$$script" --out results; \
+	done
+
 bench: $(STAMP)
 	-$(BIN)/python -m pip install --quiet -e '.[peers]' || echo "Drake not installable here: benchmarking without peers"
 	MPLBACKEND=Agg $(BIN)/python -m gaitopt.bench --out results/bench.json

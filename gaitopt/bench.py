@@ -26,7 +26,7 @@ measures
 
 and compares every fixed point with gaitopt's and with DESIGN.md's reference numbers.  It prints
 a table and writes everything (with the machine, the versions and the date) to ``--out``,
-atomically.  Sized for a 2-core machine: about a minute and a half with the defaults.
+atomically.  Sized for a 2-core machine: about a minute with the defaults, Drake included.
 """
 
 from __future__ import annotations
@@ -569,7 +569,8 @@ def rows(record: dict[str, Any]) -> list[list[str]]:
                 ]
             )
         for label, r in e.get("drake", {}).get("runs", {}).items():
-            note = f"{r['steps']} steps" + ("" if r["settled"] else ", not settled")
+            unmet = ", not converged" if label.startswith("converge") else ", not settled"
+            note = f"{r['steps']} steps" + ("" if r["settled"] else unmet)
             out.append(
                 [
                     name,

@@ -141,13 +141,17 @@ class LimitCycle:
             "residual": _num(self.residual),
             "verified": bool(self.verified),
             "section_coordinates": list(self.section_coordinates),
-            "inputs": dict(zip(self.model.inputs, map(float, self.inputs), strict=True)),
+            "inputs": dict(zip(self.model.inputs, map(float, self._input_values()), strict=True)),
             "durations": [float(d) for d in self.durations],
             "verification_error": _num(self.verification_error),
             "discretisation_error": _num(self.discretisation_error),
             "iterations": int(self.iterations),
             "solve_time": _num(self.solve_time),
         }
+
+    def _input_values(self) -> np.ndarray:
+        n = len(self.model.inputs)
+        return self.inputs if len(self.inputs) == n else np.zeros(n)
 
     def __repr__(self) -> str:
         mods = ", ".join(f"{abs(z):.4g}" for z in self.multipliers)

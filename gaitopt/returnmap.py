@@ -127,6 +127,9 @@ def fixed_points_1d(
             if d[j] * d[j + 1] < 0
             else grid[j]
         )
+        defect = return_map(model, [root], inputs=inputs)[0] - root
+        if not abs(defect) < 1e-6 * (1 + abs(root)):
+            continue  # a jump of the map (rocking vs vaulting), not a fixed point
         name = model.section.coordinates[0]
         cycle = find_limit_cycle(model, {name: root}, inputs=inputs)
         if cycle.success:

@@ -51,7 +51,7 @@ class CompassGait(HybridModel):
     reference = "Goswami, Thuilot & Espiau 1996; Drake CompassGait"
     inputs = ("hip_torque",)
     input_units = ("N*m",)
-    mesh = (4, 5)  # 20 RK8 steps per step: discretisation error ~1e-12
+    mesh = (4, 4)  # 16 RK8 steps per step: discretisation error ~1e-11
 
     mass_hip: float = parameter(
         10.0, unit="kg", doc="hip point mass m_h", source=_DRAKE, low=0.0, high=1e4, low_open=True
