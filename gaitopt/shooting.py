@@ -273,9 +273,10 @@ def find_limit_cycle(
     model : HybridModel
         The model, with its parameters.
     guess : mapping, LimitCycle or None
-        Section coordinates to start from (missing ones from ``model.default_start()``), or a
-        previous result (warm start).  The shooting guess is a simulation of ``steps`` returns
-        from there; ``None`` starts from the model's default start.
+        Section coordinates to start from (missing ones from ``model.default_start()``): the
+        shooting guess is then a simulation of ``steps`` returns from there; ``None`` starts from
+        the model's default start.  Or a previous result (warm start, e.g. after a parameter
+        change): its orbit seeds the nodes directly.
     steps : int
         Returns to the section per orbit (``2`` for a period-2 gait).
     inputs : array_like, optional
@@ -339,35 +340,36 @@ def find_limit_cycle(
             **extra,
         )
 
-    # -- guess from a simulation ---------------------------------------------------------------
+    # -- guess: a previous orbit (warm start), or a simulation ------------------------------------
     explicit = guess is not None
-    if isinstance(guess, LimitCycle):
-        s0 = guess.section_point
+    warm = isinstance(guess, LimitCycle)
+    s0 = guess.section_point if warm else model.section_vector(guess if explicit else {})
+    if warm and _reusable(guess, model, tr):
+        w0 = tr.pack(s0, *_nodes_from_orbit(guess, tr))
     else:
-        s0 = model.section_vector(guess if guess is not None else {})
-    sim = simulate(
-        model,
-        model.lift(s0),
-        steps=steps,
-        inputs=u,
-        max_phase_time=_time_limit(model),
-        rtol=1e-8,
-        atol=1e-9,  # a guess: Newton does the rest
-    )
-    if not sim.success:
-        where = ", ".join(
-            f"{k}={v:.6g}" for k, v in zip(model.section.coordinates, s0, strict=True)
+        sim = simulate(
+            model,
+            model.lift(s0),
+            steps=steps,
+            inputs=u,
+            max_phase_time=_time_limit(model),
+            rtol=1e-8,
+            atol=1e-9,  # a guess: Newton does the rest
         )
-        if explicit and not isinstance(guess, LimitCycle):
-            raise GuessError(
-                f"{model.name}: `guess` {where} leads nowhere: {sim.message}; "
-                f"try another guess (e.g. from `gaitopt simulate {model.name}`)"
+        if not sim.success:
+            where = ", ".join(
+                f"{k}={v:.6g}" for k, v in zip(model.section.coordinates, s0, strict=True)
             )
-        return fail(
-            f"no gait found: the simulation from {where} does not complete "
-            f"{steps} step(s) ({sim.message}); the gait may not exist at these parameters"
-        )
-    w0 = tr.pack(s0, *_nodes_from_simulation(sim, tr))
+            if explicit and not warm:
+                raise GuessError(
+                    f"{model.name}: `guess` {where} leads nowhere: {sim.message}; "
+                    f"try another guess (e.g. from `gaitopt simulate {model.name}`)"
+                )
+            return fail(
+                f"no gait found: the simulation from {where} does not complete "
+                f"{steps} step(s) ({sim.message}); the gait may not exist at these parameters"
+            )
+        w0 = tr.pack(s0, *_nodes_from_simulation(sim, tr))
 
     # -- solve, then refine the mesh until the discretisation error is below tol ---------------
     refinements, disc_error = 0, float("nan")
@@ -508,6 +510,28 @@ def _nodes_from_simulation(
         nodes.append(np.atleast_2d(arc.solution(t)).reshape(-1, S))
         durations.append(T)
     return nodes, durations
+
+
+def _reusable(cycle: LimitCycle, model: HybridModel, tr: Transcription) -> bool:
+    """Whether a previous orbit can seed the shooting nodes directly (same model class, same
+    phase sequence)."""
+    return (
+        type(cycle.model) is type(model)
+        and cycle.steps == tr.cycles
+        and len(cycle.orbit) == len(tr.chain)
+        and len(cycle.durations) == len(tr.chain)
+    )
+
+
+def _nodes_from_orbit(cycle: LimitCycle, tr: Transcription) -> tuple[list[np.ndarray], list[float]]:
+    """Segment start states of a previous orbit (interpolated in its dense samples)."""
+    S = tr.disc.segments
+    nodes = []
+    for arc in cycle.orbit:
+        tau = (arc.t - arc.t[0]) / (arc.t[-1] - arc.t[0])
+        at = np.arange(S) / S
+        nodes.append(np.array([np.interp(at, tau, row) for row in arc.x]))
+    return nodes, [float(d) for d in cycle.durations]
 
 
 def _phase_label(model: HybridModel, tr: Transcription, k: int) -> str:

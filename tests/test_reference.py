@@ -205,3 +205,14 @@ def test_ipopt_method_agrees_with_newton(cycles):
     cycle = gaitopt.find_limit_cycle(model, method="ipopt")
     assert cycle.success, cycle.message
     np.testing.assert_allclose(cycle.x, cycles["compass_gait"].x, atol=1e-10)
+
+
+def test_warm_start_from_a_previous_orbit_after_a_parameter_change(cycles):
+    # A previous orbit seeds the nodes (no simulation); the result must equal a cold solve at
+    # the new parameters to the solver tolerance.
+    model = cycles["compass_gait"].model.replace(slope=0.056)
+    warm = gaitopt.find_limit_cycle(model, cycles["compass_gait"])
+    cold = gaitopt.find_limit_cycle(model)
+    assert warm.success and cold.success
+    np.testing.assert_allclose(warm.x, cold.x, atol=1e-10)
+    assert warm.period == pytest.approx(cold.period, abs=1e-10)
