@@ -20,8 +20,8 @@ import numpy as np
 from matplotlib.animation import FuncAnimation, PillowWriter
 
 from .errors import GaitoptInputError
+from .files import replaced_atomically
 from .hybrid import HybridModel, Phase
-from .plotting import temporary_path
 from .simulation import Simulation
 
 __all__ = ["animate_walker", "walker_frames"]
@@ -220,13 +220,9 @@ def animate_walker(
         return body, mass, steps, clock
 
     animation = FuncAnimation(fig, draw, frames=len(frames), blit=False)
-    tmp = temporary_path(path, ".gif")  # Pillow picks the format from the suffix
     try:
-        animation.save(tmp, writer=PillowWriter(fps=int(fps)), dpi=dpi)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+        with replaced_atomically(path, ".gif") as tmp:  # Pillow picks the format from the suffix
+            animation.save(tmp, writer=PillowWriter(fps=int(fps)), dpi=dpi)
     finally:
         plt.close(fig)
     return path

@@ -40,7 +40,6 @@ import platform
 import statistics
 import subprocess
 import sys
-import tempfile
 import time
 from collections.abc import Callable
 from importlib import metadata
@@ -50,6 +49,7 @@ from typing import Any
 import numpy as np
 
 from . import _bench_baselines as baselines
+from .files import write_json
 
 __all__ = ["main", "run"]
 
@@ -673,32 +673,6 @@ def format_table(record: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def _write_json(path: Path, record: dict[str, Any]) -> None:
-    """Write ``record`` to ``path`` atomically (temporary file in the same folder, replace)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-
-    def clean(v: Any) -> Any:
-        if isinstance(v, float):
-            return v if math.isfinite(v) else None
-        if isinstance(v, dict):
-            return {k: clean(x) for k, x in v.items()}
-        if isinstance(v, (list, tuple)):
-            return [clean(x) for x in v]
-        if isinstance(v, (np.floating, np.integer, np.bool_)):
-            return clean(v.item())
-        return v
-
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as fh:
-            json.dump(clean(record), fh, indent=2, allow_nan=False)
-            fh.write("\n")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m gaitopt.bench",
@@ -754,7 +728,8 @@ def main(argv: list[str] | None = None) -> int:
         converge=not args.quick,
     )
     record["table"] = rows(record)
-    _write_json(args.out, record)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    write_json(record, args.out)
     print(format_table(record))
     print(f"Wrote {args.out}")
     return 0

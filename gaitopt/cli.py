@@ -36,6 +36,7 @@ from typing import Any, NoReturn
 import numpy as np
 
 from .errors import GuessError, ParameterError, StateError, did_you_mean
+from .files import jsonable
 from .hybrid import HybridModel
 from .models import REGISTRY
 from .parameters import ParameterSpec, check_parameter
@@ -243,23 +244,6 @@ def parse_x0(model: HybridModel, items: Sequence[str] | None) -> np.ndarray:
 
 
 # -- output --------------------------------------------------------------------------------------
-def _jsonable(value: Any) -> Any:
-    """Plain JSON types; non-finite numbers become ``null`` (strict JSON has no NaN)."""
-    if isinstance(value, Mapping):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        return float(value) if math.isfinite(value) else None
-    if isinstance(value, (complex, np.complexfloating)):
-        return [_jsonable(value.real), _jsonable(value.imag)]
-    return value
-
-
 @contextlib.contextmanager
 def _solver_output_to_stderr() -> Iterator[None]:
     """Send whatever the solver prints to stderr while the block runs.
@@ -293,7 +277,7 @@ def _flush_c_stdio() -> None:
 
 
 def _print_json(value: Any) -> None:
-    print(json.dumps(_jsonable(value), indent=2, ensure_ascii=False, allow_nan=False))
+    print(json.dumps(jsonable(value), indent=2, ensure_ascii=False, allow_nan=False))
 
 
 def _format_params(params: Mapping[str, float]) -> str:

@@ -17,29 +17,26 @@ from the model's default start and write, under ``OUT/<model>/``,
 
 When the search fails only ``cycle.json`` is written (and figures of an earlier run removed).
 
-Every file is written whole or not at all (a temporary file in the same directory, then
-:func:`os.replace`).  A summary table ends the run.  Exit status: 0 when every model was solved and
-drawn, 1 when a model failed to solve or a figure failed (the error is printed; the other models
-go on), 2 for bad arguments.
+Every file is written whole or not at all (:mod:`gaitopt.files`: a temporary file in the same
+directory, then :func:`os.replace`).  A summary table ends the run.  Exit status: 0 when every
+model was solved and drawn, 1 when a model failed to solve or a figure failed (the error is
+printed; the other models go on), 2 for bad arguments.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import math
-import os
 import sys
 import time
 import traceback
-import uuid
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from .errors import GaitoptInputError
+from .files import write_json
 from .hybrid import HybridModel
 from .models import REGISTRY
 from .models import model as make_model
@@ -47,32 +44,11 @@ from .result import LimitCycle
 from .shooting import find_limit_cycle
 from .simulation import simulate
 
-__all__ = ["main", "run_model", "write_json", "return_map_interval"]
+__all__ = ["main", "run_model", "return_map_interval"]
 
 WALK_STEPS = 4  # simulated steps in walking.gif
 TRANSIENT_STEPS = 8  # simulated steps overlaid on the phase portrait
 FIGURES = ("phase_portrait.png", "return_map.png", "walking.gif")
-
-
-def write_json(data: Any, path: str | os.PathLike) -> Path:
-    """Write ``data`` as JSON to ``path`` whole or not at all (temporary file, then replace).
-
-    Non-finite floats are refused (strict JSON); :meth:`LimitCycle.as_dict` already maps them to
-    ``null``.
-    """
-    path = Path(path)
-    text = json.dumps(data, indent=2, allow_nan=False) + "\n"
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}.tmp")
-    try:
-        with open(tmp, "x", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return path
 
 
 def return_map_interval(cycle: LimitCycle) -> tuple[float, float]:

@@ -12,7 +12,6 @@ and Garcia's simplest walker (``τ = t·sqrt(g/l)``).
 from __future__ import annotations
 
 import os
-import uuid
 from collections.abc import Callable
 from pathlib import Path
 
@@ -22,6 +21,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from .errors import GaitoptInputError
+from .files import replaced_atomically
 from .hybrid import HybridModel, Transition
 from .result import LimitCycle
 from .returnmap import fixed_points_1d, return_map
@@ -32,7 +32,6 @@ __all__ = [
     "plot_return_map",
     "coordinate_pairs",
     "save_figure",
-    "temporary_path",
 ]
 
 _RATE_SUFFIX = "_dot"
@@ -386,22 +385,14 @@ def save_figure(fig: Figure, path: str | os.PathLike, *, dpi: int = 110) -> Path
     """Write ``fig`` to ``path`` whole or not at all, then close it.
 
     The figure is saved to a temporary file in the same directory and moved into place with
-    :func:`os.replace`; the format comes from the suffix of ``path``.
+    :func:`os.replace` (:func:`gaitopt.files.replaced_atomically`); the format comes from the
+    suffix of ``path``.
     """
     path = Path(path)
     fmt = path.suffix.lstrip(".") or "png"
-    tmp = temporary_path(path)
     try:
-        fig.savefig(tmp, format=fmt, dpi=dpi)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+        with replaced_atomically(path) as tmp:
+            fig.savefig(tmp, format=fmt, dpi=dpi)
     finally:
         plt.close(fig)
     return path
-
-
-def temporary_path(path: Path, suffix: str = ".tmp") -> Path:
-    """A fresh hidden name next to ``path`` for writing before :func:`os.replace`."""
-    return path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}{suffix}")

@@ -12,6 +12,7 @@ import numpy as np
 import gaitopt
 from gaitopt import _bench_baselines as baselines
 from gaitopt import bench
+from gaitopt.files import write_json
 
 
 def _solve(name: str, start=None) -> baselines.BaselineResult:
@@ -65,7 +66,7 @@ def test_bench_record_and_table(tmp_path):
     )
     record["table"] = bench.rows(record)
     out = tmp_path / "bench.json"
-    bench._write_json(out, record)
+    write_json(record, out)
     data = json.loads(out.read_text())
     entry = data["models"]["rimless_wheel"]
     assert entry["first_call"]["verify_false"]["runs"], entry["first_call"]

@@ -22,8 +22,8 @@ from PIL import Image  # noqa: E402
 import gaitopt  # noqa: E402
 from gaitopt.animation import animate_walker, walker_frames  # noqa: E402
 from gaitopt.errors import GaitoptInputError  # noqa: E402
+from gaitopt.files import write_json  # noqa: E402
 from gaitopt.gaits import main as gaits_main  # noqa: E402
-from gaitopt.gaits import write_json  # noqa: E402
 from gaitopt.plotting import plot_phase_portrait, plot_return_map  # noqa: E402
 
 
@@ -219,7 +219,7 @@ def test_gaits_runner_rejects_unknown_models(tmp_path, capsys):
 def test_write_json_is_all_or_nothing(tmp_path):
     path = tmp_path / "cycle.json"
     write_json({"period": 1.0}, path)
-    with pytest.raises(ValueError):
-        write_json({"period": float("nan")}, path)  # not JSON: the old file stays whole
+    with pytest.raises(TypeError):
+        write_json({"period": object()}, path)  # not JSON: the old file stays whole
     assert json.loads(path.read_text()) == {"period": 1.0}
     assert _hidden(tmp_path) == []
