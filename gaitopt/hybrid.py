@@ -269,8 +269,9 @@ class HybridModel:
         """A copy with some parameters changed (checked like the constructor)."""
         return dataclasses.replace(self, **changes)
 
-    def zero_input(self) -> np.ndarray:
-        """The passive input ``u = 0``."""
+    def nominal_input(self) -> np.ndarray:
+        """The per-step input used when none is given: ``u = 0`` (passive) unless a model says
+        otherwise (e.g. a runner's touchdown angle parameter)."""
         return np.zeros(len(self.inputs))
 
     # -- states ------------------------------------------------------------------------------

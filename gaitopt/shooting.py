@@ -315,7 +315,7 @@ def find_limit_cycle(
         raise GaitoptInputError(f"`method` must be one of {', '.join(_METHODS)}, got {method!r}")
     if not isinstance(steps, int) or steps < 1:
         raise GaitoptInputError(f"`steps` must be a positive integer, got {steps!r}")
-    u = model.zero_input() if inputs is None else np.asarray(inputs, dtype=float).ravel()
+    u = model.nominal_input() if inputs is None else np.asarray(inputs, dtype=float).ravel()
     if u.size != len(model.inputs):
         raise GaitoptInputError(
             f"`inputs` must have {len(model.inputs)} entries ({', '.join(model.inputs) or 'none'})"

@@ -288,7 +288,7 @@ def _initial_state(model: HybridModel, x0, phase: int) -> np.ndarray:
 def _as_policy(model: HybridModel, inputs) -> InputPolicy:
     if callable(inputs):
         return lambda k, x: np.asarray(inputs(k, x), dtype=float).ravel()
-    u = model.zero_input() if inputs is None else np.asarray(inputs, dtype=float).ravel()
+    u = model.nominal_input() if inputs is None else np.asarray(inputs, dtype=float).ravel()
     if u.size != len(model.inputs):
         raise GaitoptInputError(
             f"`inputs` must have {len(model.inputs)} entries ({', '.join(model.inputs) or 'none'}),"

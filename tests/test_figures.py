@@ -197,7 +197,7 @@ def test_gaits_runner_reports_a_failed_search(tmp_path, capsys, monkeypatch):
 
     def fail(model):
         message = "newton did not converge (test)"
-        return gaitopt.LimitCycle(False, message, model, inputs=model.zero_input())
+        return gaitopt.LimitCycle(False, message, model, inputs=model.nominal_input())
 
     stale = tmp_path / "compass_gait" / "phase_portrait.png"
     stale.parent.mkdir()

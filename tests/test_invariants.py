@@ -86,7 +86,7 @@ def test_reset_lands_on_the_next_phase_side_of_the_guard(name, cycles):
     sim = gaitopt.simulate(model, cycle.x, steps=1)
     x_minus = sim.events[0].state_before
     x_plus = sim.events[0].state_after
-    u, p = model.zero_input(), model.p
+    u, p = model.nominal_input(), model.p
     assert abs(float(transition.guard(x_minus, u, p))) < 1e-12
     assert abs(float(transition.guard(x_plus, u, p))) < 1e-12
     assert float(transition.admissible(x_minus, u, p)) > 0

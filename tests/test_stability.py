@@ -72,10 +72,10 @@ def test_multipliers_predict_convergence_in_simulation(cycles):
 def test_verification_rejects_a_point_that_is_not_on_the_orbit(cycles):
     cycle = cycles["compass_gait"]
     model = cycle.model
-    ok, error, _ = _verify(model, cycle.x, cycle.durations, 1, model.zero_input(), 1e-7)
+    ok, error, _ = _verify(model, cycle.x, cycle.durations, 1, model.nominal_input(), 1e-7)
     assert ok and error < 1e-9
     wrong = cycle.x + np.array([1e-4, -1e-4, 0.0, 0.0])
-    ok, error, message = _verify(model, wrong, cycle.durations, 1, model.zero_input(), 1e-7)
+    ok, error, message = _verify(model, wrong, cycle.durations, 1, model.nominal_input(), 1e-7)
     assert not ok and "returns" in message
 
 
@@ -86,7 +86,7 @@ def test_dense_check_rejects_an_orbit_through_the_ground(cycles):
     cycle = cycles["compass_gait"]
     model = cycle.model
     tr = transcription(type(model), cycle.discretisation, 1)
-    u, p = model.zero_input(), model.p
+    u, p = model.nominal_input(), model.p
     assert _check_dense(model, tr, cycle.orbit, u, p) is None
     arc = cycle.orbit[0]
     t = np.linspace(0, 1.6 * cycle.period, arc.x.shape[1])
