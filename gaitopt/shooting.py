@@ -36,7 +36,13 @@ from .stability import is_stable, section_jacobians
 __all__ = ["MultipleShooting", "find_limit_cycle"]
 
 _METHODS = ("newton", "ipopt")
-_NEWTON = {"error_on_fail": False, "abstol": 1e-12, "abstolStep": 1e-15, "max_iter": 30}
+_NEWTON = {
+    "error_on_fail": False,
+    "show_eval_warnings": False,  # a diverging guess is reported in the result, not on stderr
+    "abstol": 1e-12,
+    "abstolStep": 1e-15,
+    "max_iter": 30,
+}
 
 
 @dataclass(frozen=True)
@@ -139,7 +145,7 @@ class Transcription:
         self._w, self._u, self._p, self._F = w, u, p, F
         self._GP, self._x_return = ca.vertcat(G, P), x_return
         self._checks_out = [
-            ca.horzcat(*ends),
+            ca.vertcat(*ends),  # stacked: phases may differ in dimension
             ca.vertcat(*dg),
             ca.vertcat(*adm),
             ca.vertcat(*durations),
@@ -147,13 +153,18 @@ class Transcription:
         self._samples = samples
 
     # Each function is built on first use: a mesh used only for the error estimate needs just
-    # its residual.  Expanded to SX where evaluated often: small dense graphs run faster so.
+    # its residual.  Short chains are expanded to SX (their small dense graphs evaluate about
+    # twice as fast); long ones (period-k orbits) stay MX, which builds in a fraction of the time
+    # and evaluates as fast at that size.
+    def _compiled(self, f: ca.Function) -> ca.Function:
+        return f.expand() if len(self.chain) <= 2 else f
+
     @cached_property
     def residual(self) -> ca.Function:
         """``F(w, u, p)``: all shooting equations."""
-        return ca.Function(
-            "residual", [self._w, self._u, self._p], [self._F], ["w", "u", "p"], ["F"]
-        ).expand()
+        return self._compiled(
+            ca.Function("residual", [self._w, self._u, self._p], [self._F], ["w", "u", "p"], ["F"])
+        )
 
     @cached_property
     def newton(self) -> ca.Function:
@@ -173,13 +184,29 @@ class Transcription:
     def linearisation(self) -> ca.Function:
         """``(∂[G; P]/∂w, ∂[G; P]/∂u, F, x_return)`` for the multipliers and the error estimate."""
         w, u, p, GP = self._w, self._u, self._p, self._GP
-        return ca.Function(
-            "linearisation",
-            [w, u, p],
-            [ca.jacobian(GP, w), ca.jacobian(GP, u), self._F, self._x_return],
-            ["w", "u", "p"],
-            ["J_w", "J_u", "F", "x_return"],
-        ).expand()
+        return self._compiled(
+            ca.Function(
+                "linearisation",
+                [w, u, p],
+                [ca.jacobian(GP, w), ca.jacobian(GP, u), self._F, self._x_return],
+                ["w", "u", "p"],
+                ["J_w", "J_u", "F", "x_return"],
+            )
+        )
+
+    @cached_property
+    def residual_jacobians(self) -> ca.Function:
+        """``(F, ∂F/∂w, ∂F/∂p, ∂F/∂u)``: the corrector of continuation in a parameter or input."""
+        w, u, p, F = self._w, self._u, self._p, self._F
+        return self._compiled(
+            ca.Function(
+                "residual_jacobians",
+                [w, u, p],
+                [F, ca.jacobian(F, w), ca.jacobian(F, p), ca.jacobian(F, u)],
+                ["w", "u", "p"],
+                ["F", "F_w", "F_p", "F_u"],
+            )
+        )
 
     @cached_property
     def checks(self) -> ca.Function:
@@ -387,27 +414,87 @@ def find_limit_cycle(
         refinements += 1
 
     residual = float(np.max(np.abs(F))) if np.all(np.isfinite(F)) else float("inf")
-    ends, dg, adm, durations = (np.asarray(v, dtype=float) for v in tr.checks(w, u, p))
-    durations = durations.ravel()
-    s_star = w[: tr.m]
-    x_star = model.lift(s_star)
-    common = dict(
-        residual=residual,
-        iterations=iterations,
-        durations=durations,
-        discretisation=disc,
-        discretisation_error=disc_error,
-        period=float(np.sum(durations)),
-        fixed_point=dict(zip(model.state_names, map(float, x_star), strict=True)),
-    )
     if not converged or not residual <= tol:
+        durations = np.asarray(tr.checks(w, u, p)[3], dtype=float).ravel()
         return fail(
             f"no periodic orbit found near the guess: {method} stopped with residual "
             f"{residual:.3g} after {iterations} iterations (tolerance {tol:g}); the gait may not "
             f"exist at these parameters, or the guess is too far from it: try a closer guess"
             + (" or the ipopt method" if method == "newton" else ""),
-            **common,
+            residual=residual,
+            iterations=iterations,
+            durations=durations,
+            period=float(np.sum(durations)),
         )
+    if disc_error > tol:
+        disc_error_note = f" (above tol {tol:g} after {refinements} refinements)"
+    else:
+        disc_error_note = ""
+    return certify(
+        model,
+        tr,
+        w,
+        u,
+        verify=verify,
+        tol=tol,
+        iterations=iterations,
+        discretisation_error=disc_error,
+        note=disc_error_note,
+        start=start,
+        linearisation=(J_w, J_u, F, x_return),
+    )
+
+
+def certify(
+    model: HybridModel,
+    tr: Transcription,
+    w: np.ndarray,
+    u: np.ndarray,
+    *,
+    verify: bool = True,
+    tol: float = 1e-10,
+    iterations: int = 0,
+    discretisation_error: float = float("nan"),
+    note: str = "",
+    start: float | None = None,
+    linearisation: tuple[np.ndarray, ...] | None = None,
+) -> LimitCycle:
+    """Check a solution ``w`` of the shooting equations and build its :class:`LimitCycle`.
+
+    The checks of :func:`find_limit_cycle` ("no false gaits"): positive durations, admissible
+    directional crossing at each phase end, no earlier crossing on dense samples, minimal period,
+    and (with ``verify``) the independent simulation; then the multipliers.  Used by
+    :func:`find_limit_cycle` and by continuation for every point of a branch.
+    """
+    start = time.perf_counter() if start is None else start
+    p = model.p
+    if linearisation is None:
+        linearisation = tr.linearisation(w, u, p)
+    J_w, J_u, F, x_return = (np.asarray(v, dtype=float) for v in linearisation)
+    residual = float(np.max(np.abs(F))) if np.all(np.isfinite(F)) else float("inf")
+    ends, dg, adm, durations = (np.asarray(v, dtype=float) for v in tr.checks(w, u, p))
+    durations = durations.ravel()
+    x_star = model.lift(w[: tr.m])
+    steps = tr.cycles
+    common = dict(
+        model=model,
+        steps=steps,
+        state_names=model.state_names,
+        section_coordinates=model.section.coordinates,
+        inputs=u,
+        residual=residual,
+        iterations=iterations,
+        durations=durations,
+        discretisation=tr.disc,
+        discretisation_error=discretisation_error,
+        period=float(np.sum(durations)),
+        fixed_point=dict(zip(model.state_names, map(float, x_star), strict=True)),
+    )
+
+    def fail(message: str, **extra: Any) -> LimitCycle:
+        note_ = model.existence_note()
+        message = f"{message} [{note_}]" if note_ else message
+        return LimitCycle(False, message, solve_time=time.perf_counter() - start, **common, **extra)
 
     # -- no false gaits ----------------------------------------------------------------------
     problem = _check_orbit(
@@ -419,7 +506,7 @@ def find_limit_cycle(
     if problem is None and steps > 1:
         problem = _check_minimal_period(model, tr, w, steps)
     if problem is not None:
-        return fail(problem, orbit=orbit, **common)
+        return fail(problem, orbit=orbit)
 
     A, B = section_jacobians(J_w, J_u, tr.m, tr.n_g)
     multipliers = np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
@@ -429,9 +516,7 @@ def find_limit_cycle(
     if verify:
         verified, error, vmessage = _verify(model, x_star, durations, steps, u, tol * 1e3)
     success = verified or not verify
-    accuracy = f"discretisation error {disc_error:.1g}" + (
-        f" (above tol {tol:g} after {refinements} refinements)" if disc_error > tol else ""
-    )
+    accuracy = f"discretisation error {discretisation_error:.1g}{note}"
     message = (
         f"periodic orbit found (residual {residual:.2g}, {accuracy}); " + vmessage
         if success
@@ -440,17 +525,12 @@ def find_limit_cycle(
     return LimitCycle(
         success=success,
         message=message,
-        model=model,
-        steps=steps,
-        state_names=model.state_names,
-        section_coordinates=model.section.coordinates,
         multipliers=multipliers if success else np.zeros(0, complex),
         stable=is_stable(multipliers) if success else None,
         verified=verified,
         verification_error=error,
         jacobian=A,
         input_jacobian=B,
-        inputs=u,
         orbit=orbit,
         solve_time=time.perf_counter() - start,
         **common,
