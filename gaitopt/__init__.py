@@ -9,6 +9,7 @@ systems — multiple shooting with CasADi, Floquet multipliers, return maps, sim
 
 from __future__ import annotations
 
+from .continuation import Branch, PseudoArclength, SpecialPoint, continuation
 from .errors import GaitoptInputError, GuessError, ParameterError, StateError, UnknownModelError
 from .hybrid import HybridModel, Phase, Section, Transition
 from .models import REGISTRY, model
@@ -20,6 +21,10 @@ __all__ = [
     "model",
     "REGISTRY",
     "find_limit_cycle",
+    "continuation",
+    "PseudoArclength",
+    "Branch",
+    "SpecialPoint",
     "MultipleShooting",
     "LimitCycle",
     "OrbitArc",

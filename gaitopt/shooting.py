@@ -321,7 +321,7 @@ def find_limit_cycle(
     tol : float
         Largest accepted residual of the shooting equations, target of the discretisation-error
         estimate and, scaled by 1e3, the largest accepted difference between the simulated return
-        and the fixed point (the simulation runs at ``rtol = 1e-11``).
+        and the fixed point (the simulation runs at ``rtol = 1e-12``).
 
     Returns
     -------
@@ -713,9 +713,25 @@ def _check_minimal_period(model, tr, w, steps) -> str | None:
     return None
 
 
+# The phase timing is a consistency check (same events, same phases), not the measure of
+# accuracy: where an orbit creeps past an unstable equilibrium (a rimless wheel that barely
+# vaults) the adaptive simulation's event times drift by far more than its states, while the
+# shooting durations carry the discretisation-error estimate.  Relative to the period:
+_TIMING_TOL = 1e-6
+
+
 def _verify(model, x_star, durations, steps, u, tol) -> tuple[bool, float, str]:
-    """Simulate from the fixed point with SciPy and compare the return and the timing."""
-    sim = simulate(model, x_star, steps=steps, inputs=u, max_phase_time=_time_limit(model))
+    """Simulate from the fixed point with SciPy: the return must be within ``tol`` (relative
+    to the state's size) of the fixed point, through the same phases at consistent times."""
+    sim = simulate(
+        model,
+        x_star,
+        steps=steps,
+        inputs=u,
+        max_phase_time=_time_limit(model),
+        rtol=1e-12,
+        atol=1e-13,
+    )
     if not sim.success:
         return False, float("inf"), f"the simulation from the fixed point fails: {sim.message}"
     expected = len(durations)
@@ -729,13 +745,13 @@ def _verify(model, x_star, durations, steps, u, tol) -> tuple[bool, float, str]:
     sim_durations = np.array([a.t1 - a.t0 for a in sim.arcs])
     timing = float(np.max(np.abs(sim_durations - durations)))
     scale = 1 + float(np.max(np.abs(x_star)))
-    if error > tol * scale or timing > tol * (1 + float(np.sum(durations))):
+    if error > tol * scale or timing > _TIMING_TOL * (1 + float(np.sum(durations))):
         return (
             False,
             error,
             (
-                f"the simulation from the fixed point returns {error:.3g} away (phase timing "
-                f"differs by {timing:.3g} s; tolerance {tol:g})"
+                f"the simulation from the fixed point returns {error:.3g} away (tolerance "
+                f"{tol:g}); phase timing differs by {timing:.3g} s"
             ),
         )
     return (

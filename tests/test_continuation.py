@@ -1,0 +1,138 @@
+"""Continuation: special points against closed forms and direct bisection; cascades."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+import gaitopt
+from gaitopt import GaitoptInputError, ParameterError
+from gaitopt.continuation import PseudoArclength, continuation
+
+
+def _rimless_boundary() -> float:
+    """Closed form (Tedrake, Underactuated Robotics): rolling exists while ω*(γ) > ω₁(γ)."""
+
+    def gap(slope: float) -> float:
+        m = gaitopt.model("rimless_wheel", slope=slope)
+        return m.rolling_speed() - m.vaulting_speed()
+
+    return brentq(gap, 0.01, 0.3, xtol=1e-15)
+
+
+@pytest.fixture(scope="module")
+def compass_branch():
+    return continuation(gaitopt.model("compass_gait"), "slope", to=0.0805, max_period=2)
+
+
+def test_rimless_wheel_existence_boundary_matches_closed_form():
+    # The rolling gait ceases to exist where ω* = ω₁ (γ_b = 0.0682294525 for 8 spokes): its
+    # period grows without bound there.  Located by bisection on the certification to 1e-8
+    # (issue: special points to 1e-8), on the existence side.
+    branch = continuation(gaitopt.model("rimless_wheel"), "slope", to=0.01)
+    boundary = [sp for sp in branch.special_points if sp.kind == "boundary"]
+    assert len(boundary) == 1
+    expected = _rimless_boundary()
+    assert boundary[0].param == pytest.approx(expected, abs=1e-8)
+    assert boundary[0].param >= expected
+    assert branch.periods[-1] > 3 * branch.periods[0]  # the period diverges at the boundary
+
+
+def test_rimless_wheel_branch_follows_the_closed_form():
+    # Along the whole branch: ω* = cot 2α sqrt(4 g/l sin α sin γ), multiplier cos² 2α (Tedrake);
+    # tolerance 1e-9 (discretisation-error estimate ≤ 1e-10).
+    branch = continuation(gaitopt.model("rimless_wheel"), "slope", to=0.3)
+    assert len(branch.cycles) > 5 and branch.params[-1] == pytest.approx(0.3, abs=1e-12)
+    for cycle in branch.cycles:
+        m = cycle.model
+        assert cycle.fixed_point["theta_dot"] == pytest.approx(m.rolling_speed(), abs=1e-9)
+        assert cycle.multipliers[0].real == pytest.approx(math.cos(2 * m.alpha) ** 2, abs=1e-9)
+    assert branch.special_points == []
+
+
+def test_period_doubling_agrees_with_bisection_on_the_multiplier(compass_branch):
+    # Two independent locations of the compass gait's first period doubling: continuation's
+    # regula falsi on det(A + I) vs a direct bisection in the slope on (min real multiplier + 1)
+    # with separate solves.  Agreement to 1e-8 (issue: special points to 1e-8).
+    pds = [sp for sp in compass_branch.special_points if sp.kind == "PD"]
+    assert len(pds) == 1
+    model = gaitopt.model("compass_gait")
+    previous = gaitopt.find_limit_cycle(model.replace(slope=0.075), verify=False)
+
+    def crossing(slope: float) -> float:
+        nonlocal previous
+        cycle = gaitopt.find_limit_cycle(model.replace(slope=slope), previous, verify=False)
+        assert cycle.success
+        previous = cycle
+        return float(np.min(cycle.multipliers.real)) + 1.0
+
+    direct = brentq(crossing, 0.075, 0.078, xtol=1e-12)
+    assert pds[0].param == pytest.approx(direct, abs=1e-8)
+    assert np.min(np.abs(pds[0].cycle.multipliers + 1)) < 1e-6
+
+
+def test_period_two_branch_after_switching_is_genuine(compass_branch):
+    # Branch switching at the PD: every point of the child is a verified period-2 orbit, not the
+    # period-1 gait repeated (its two steps differ in simulation), and it starts at the PD.
+    assert len(compass_branch.children) == 1
+    child = compass_branch.children[0]
+    pd = compass_branch.special_points[0].param
+    assert child.steps == 2 and len(child.cycles) >= 3
+    assert child.params[0] == pytest.approx(pd, abs=2e-3)
+    for cycle in child.cycles:
+        assert cycle.success and cycle.verified and cycle.steps == 2
+    last = child.cycles[-1]
+    sim = gaitopt.simulate(last.model, last.x, steps=2)
+    assert np.max(np.abs(sim.section_states[1] - last.x)) > 1e-3
+    np.testing.assert_allclose(sim.section_states[2], last.x, atol=1e-8)
+
+
+def test_branch_columns_and_contract(compass_branch):
+    data = compass_branch.as_dict()
+    assert {"model", "param", "points", "special_points"} <= set(data)
+    assert data["param"] == "slope"
+    for point in data["points"]:
+        assert {"param", "period", "fixed_point", "multipliers", "stable"} <= set(point)
+    assert all(sp["kind"] in ("LP", "PD", "NS", "boundary") for sp in data["special_points"])
+    params = compass_branch.params
+    assert np.all(np.diff(params) > 0)  # no fold on this branch
+    assert compass_branch.fixed_points.shape == (len(params), 4)
+    # stable before the PD, unstable after it
+    pd = compass_branch.special_points[0].param
+    assert np.all(compass_branch.stable[params < pd]) and not np.any(
+        compass_branch.stable[params > pd]
+    )
+    header, rows = compass_branch.csv_rows()
+    assert header[:3] == ["steps", "slope", "period"] and len(rows) == sum(
+        len(b.cycles) for b in compass_branch.descendants()
+    )
+
+
+def test_both_directions_joins_at_the_start():
+    model = gaitopt.model("compass_gait")
+    branch = continuation(
+        model,
+        "slope",
+        to=0.06,
+        both_directions=True,
+        cascade=False,
+        options=PseudoArclength(max_points=6),
+    )
+    params = branch.params
+    assert params[0] < 0.0525 < params[-1]
+    assert np.all(np.diff(params) > 0)
+
+
+def test_bad_input():
+    model = gaitopt.model("compass_gait")
+    with pytest.raises(ParameterError, match=r"unknown parameter 'slop'.*did you mean 'slope'"):
+        continuation(model, "slop", to=0.06)
+    with pytest.raises(ParameterError, match=r"`slope` = 2 is out of range"):
+        continuation(model, "slope", to=2.0)
+    with pytest.raises(ParameterError, match=r"integer values"):
+        continuation(gaitopt.model("rimless_wheel"), "spokes", to=9)
+    with pytest.raises(GaitoptInputError, match=r"`step` must be > 0"):
+        PseudoArclength(step=0.0)
