@@ -14,13 +14,13 @@ import json
 import math
 import os
 import uuid
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-__all__ = ["replaced_atomically", "jsonable", "write_json"]
+__all__ = ["replaced_atomically", "jsonable", "write_json", "write_csv"]
 
 
 @contextlib.contextmanager
@@ -118,4 +118,34 @@ def write_json(data: Any, path: str | os.PathLike) -> Path:
         fh.write(text)
         fh.flush()
         os.fsync(fh.fileno())
+    return path
+
+
+def write_csv(
+    header: Sequence[str], rows: Iterable[Sequence[Any]], path: str | os.PathLike
+) -> Path:
+    """Write a table as CSV, whole or not at all (non-finite numbers as empty cells).
+
+    Parameters
+    ----------
+    header : sequence of str
+        Column names.
+    rows : iterable of sequences
+        The rows, one value per column.
+    path : path-like
+        Destination.
+    """
+    import csv
+
+    path = Path(path)
+    with replaced_atomically(path) as tmp, open(tmp, "x", newline="", encoding="utf-8") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(list(header))
+        for row in rows:
+            writer.writerow(
+                [
+                    "" if v is None or (isinstance(v, float) and not math.isfinite(v)) else v
+                    for v in jsonable(list(row))
+                ]
+            )
     return path

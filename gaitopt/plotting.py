@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -32,11 +33,14 @@ __all__ = [
     "plot_return_map",
     "coordinate_pairs",
     "save_figure",
+    "plot_branch",
 ]
 
 _RATE_SUFFIX = "_dot"
 # Samples per simulated arc for the transient overlay.
 _TRANSIENT_SAMPLES = 150
+# Marker shapes of the kinds of reset in one cycle (first kind: circles).
+_RESET_MARKERS = ("o", "s", "D", "^", "v")
 
 
 def coordinate_pairs(states: tuple[str, ...] | list[str]) -> list[str]:
@@ -73,8 +77,14 @@ def plot_phase_portrait(
     of the orbit is a solid line; each reset that moves the state (an impact, a relabelling such as
     the compass gait's leg swap) is a dashed jump from the arc's end to the next arc's start
     (cyclically: the last arc jumps to the first), with the pre-reset state marked by a hollow
-    circle and the post-reset state by a filled one.  A simulated transient, if given, is drawn as
-    thin grey lines (one per coordinate, broken at resets) under the orbit.
+    circle and the post-reset state by a filled one.  Where the state dimension changes (the
+    kneed walker's knee strike locks the shank to the thigh; heel strike releases it) a coordinate
+    that stops being a state gets only its hollow end marker and one that becomes a state only its
+    filled start marker.  If the cycle has several kinds of reset, each kind has its own marker
+    shape (circle, square, diamond, ...) and legend entry named after the transition
+    (``"knee strike (impact)"``); with one kind the legend says ``"reset (impact)"``.  A simulated
+    transient, if given, is drawn as thin grey lines (one per coordinate, broken at resets) under
+    the orbit.
 
     Parameters
     ----------
@@ -132,12 +142,40 @@ def plot_phase_portrait(
             labelled.add(q)
             ax.plot(arc.x[i], arc.x[j], color=colours[q], lw=1.8, label=label, zorder=3)
 
-    # Resets: dashed jumps from each arc's end to the next arc's start.
+    # Resets: dashed jumps from each arc's end to the next arc's start.  With several kinds of
+    # reset in the cycle (the kneed walker's knee strike and heel strike) each kind has its own
+    # marker shape and legend entry, named after the transition.
+    kinds = list(dict.fromkeys(arc.transition for arc in arcs))
+    named = len(kinds) > 1
+    shapes = {kind: _RESET_MARKERS[i % len(_RESET_MARKERS)] for i, kind in enumerate(kinds)}
     for k, arc in enumerate(arcs):
         nxt = arcs[(k + 1) % len(arcs)]
         tr = _transition(model, arc.phase, arc.transition)
-        for q in coordinate_pairs(arc.states):
-            if q not in coordinate_pairs(nxt.states):
+        marker = shapes[arc.transition] if named else "o"
+        if named:
+            kind = arc.transition + (" (impact)" if tr is None or tr.impact else "")
+        else:
+            kind = "reset (impact)" if tr is None or tr.impact else "reset"
+        if named and kind not in labelled:
+            # A neutral legend entry for the marker shape (the markers take each coordinate's
+            # colour).
+            labelled.add(kind)
+            ax.scatter([], [], s=28, marker=marker, color="0.35", label=kind)
+        before_pairs, after_pairs = coordinate_pairs(arc.states), coordinate_pairs(nxt.states)
+        for q in before_pairs:
+            if q not in after_pairs:
+                # The coordinate stops being a state at this reset (a knee that locks: the shank
+                # then moves with the thigh): mark where it ends.
+                i, j = arc.states.index(q), arc.states.index(q + _RATE_SUFFIX)
+                ax.scatter(
+                    arc.x[i, -1],
+                    arc.x[j, -1],
+                    s=28,
+                    marker=marker,
+                    facecolors="white",
+                    edgecolors=colours[q],
+                    zorder=4,
+                )
                 continue
             i, j = arc.states.index(q), arc.states.index(q + _RATE_SUFFIX)
             i2, j2 = nxt.states.index(q), nxt.states.index(q + _RATE_SUFFIX)
@@ -149,11 +187,19 @@ def plot_phase_portrait(
                 # orbit closes only to the shooting accuracy, hence the relative 1e-6.
                 continue
             ax.plot(*np.c_[before, after], color=colours[q], lw=1.2, ls="--", zorder=2)
-            ax.scatter(*before, s=28, facecolors="white", edgecolors=colours[q], zorder=4)
-            kind = "reset (impact)" if tr is None or tr.impact else "reset"
+            ax.scatter(
+                *before, s=28, marker=marker, facecolors="white", edgecolors=colours[q], zorder=4
+            )
             label = None if kind in labelled else kind
             labelled.add(kind)
-            ax.scatter(*after, s=28, color=colours[q], zorder=4, label=label)
+            ax.scatter(*after, s=28, marker=marker, color=colours[q], zorder=4, label=label)
+        for q in after_pairs:
+            if q not in before_pairs:
+                # The coordinate becomes a state at this reset (a knee released): mark its start.
+                i2, j2 = nxt.states.index(q), nxt.states.index(q + _RATE_SUFFIX)
+                ax.scatter(
+                    nxt.x[i2, 0], nxt.x[j2, 0], s=28, marker=marker, color=colours[q], zorder=4
+                )
 
     if simulation is not None:
         _plot_transient(ax, model, simulation, names)
@@ -396,3 +442,113 @@ def save_figure(fig: Figure, path: str | os.PathLike, *, dpi: int = 110) -> Path
     finally:
         plt.close(fig)
     return path
+
+
+def plot_branch(
+    branch: Any,
+    *,
+    coordinate: str | None = None,
+    axes: tuple[Axes, Axes] | None = None,
+) -> tuple[Figure, tuple[Axes, Axes]]:
+    """Bifurcation diagram of a continuation branch and its period-doubled children.
+
+    Top: a section coordinate of every return of each orbit (a period-k gait shows k values)
+    against the parameter — solid where stable, dotted where unstable.  Bottom: the largest
+    |multiplier| with the stability limit 1.  Special points are marked and labelled.
+
+    Parameters
+    ----------
+    branch : gaitopt.continuation.Branch
+        The branch (its ``children`` are drawn too).
+    coordinate : str, optional
+        Section coordinate to draw (default: the first one).
+    axes : pair of Axes, optional
+        Where to draw.
+
+    Returns
+    -------
+    (Figure, (Axes, Axes))
+    """
+    model = branch.model
+    name = coordinate or model.section.coordinates[0]
+    if name not in model.state_names:
+        raise GaitoptInputError(
+            f"`coordinate` {name!r} is not a state of {model.name}; states: "
+            f"{', '.join(model.state_names)}"
+        )
+    index = model.state_names.index(name)
+    if axes is None:
+        fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(7.5, 6.5))
+    else:
+        top, bottom = axes
+        fig = top.figure
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for depth, sub in enumerate(branch.descendants()):
+        colour = colours[depth % len(colours)]
+        # The branch's points with its special points inserted in branch order: a special point
+        # is the neutral end of both neighbouring segments (solid up to it on the stable side).
+        rows = [(c, bool(c.stable)) for c in sub.cycles]
+        for offset, sp in enumerate(
+            sorted(
+                (
+                    sp
+                    for sp in sub.special_points
+                    if sp.cycle is not None and sp.cycle.success and sp.kind != "boundary"
+                ),
+                key=lambda sp: sp.index,
+            )
+        ):
+            rows.insert(sp.index + 1 + offset, (sp.cycle, True))
+        lam = np.array([getattr(c.model, branch.param) for c, _ in rows])
+        stable = np.array([flag for _, flag in rows])
+        returns = np.array(
+            [[arc.x[index, 0] for arc in c.orbit if arc.phase == 0] for c, _ in rows]
+        )
+        for k in range(returns.shape[1] if returns.size else 0):
+            _draw_by_stability(
+                top, lam, returns[:, k], stable, colour, f"period {sub.steps}" if k == 0 else None
+            )
+        mods = np.array([np.max(np.abs(c.multipliers)) for c, _ in rows])
+        _draw_by_stability(bottom, lam, mods, stable, colour, None)
+        for sp in sub.special_points:
+            if sp.cycle is None:
+                continue
+            value = sp.cycle.fixed_point[name]
+            top.plot([sp.param], [value], "o", color="k", ms=5, zorder=5)
+            top.annotate(
+                sp.kind, (sp.param, value), textcoords="offset points", xytext=(4, 4), fontsize=8
+            )
+            bottom.plot([sp.param], [np.max(np.abs(sp.cycle.multipliers))], "o", color="k", ms=5)
+    bottom.axhline(1.0, color="0.5", lw=0.8, ls="--")
+    top.set_ylabel(f"{name} on the section")
+    bottom.set_ylabel("max |multiplier|")
+    bottom.set_xlabel(branch.param)
+    top.set_title(
+        f"{model.title or model.name}: gaits vs {branch.param} (solid stable, dotted unstable)"
+    )
+    top.legend(fontsize=8, loc="best")
+    for ax in (top, bottom):
+        ax.grid(alpha=0.3)
+    return fig, (top, bottom)
+
+
+def _draw_by_stability(ax: Axes, x, y, stable, colour, label) -> None:
+    """Solid where a segment's two ends are stable, dotted otherwise (runs merged)."""
+    x, y, stable = np.asarray(x), np.asarray(y), np.asarray(stable, dtype=bool)
+    if len(x) == 1:
+        ax.plot(x, y, "o" if stable[0] else ".", color=colour, label=label)
+        return
+    solid = stable[:-1] & stable[1:]  # style of segment i → i + 1
+    start = 0
+    for j in range(1, len(solid) + 1):
+        if j == len(solid) or solid[j] != solid[start]:
+            ax.plot(
+                x[start : j + 1],
+                y[start : j + 1],
+                color=colour,
+                ls="-" if solid[start] else ":",
+                lw=1.6,
+                label=label,
+            )
+            label = None
+            start = j
