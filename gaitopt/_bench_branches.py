@@ -4,7 +4,7 @@
   to 0.075, every point certified and verified by simulation;
 * **the compass-gait slope study vs brute force** — continuation with the period-doubling cascade
   (period 1 → 8, special points located to 1e-10) against what a simulation study does: an orbit
-  diagram (simulate until settled at each slope, keep the last steps) at slope resolution 1e-4,
+  diagram (simulate until settled at each slope, keep the last steps) at slope resolution 2.5e-4,
   through ``sweep`` on the same 2 workers; both times, and how well each locates the first
   period doubling (the orbit diagram only to its resolution, and biased by the slow transients
   near the bifurcation, where the multiplier is close to −1);
