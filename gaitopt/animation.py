@@ -5,7 +5,8 @@ relative to the current contact point, drawn as one polyline (legs) with a dot o
 (the point named ``hip``, ``hub``, ``mass``, ``body`` or ``com``).  At each transition with a
 ``foothold`` the contact point moves to that point's world position at the event, so successive
 steps walk on.  Models with a shape the polyline does not show (the rimless wheel's spokes) have
-a drawing helper in :data:`_OUTLINES`.
+a drawing helper in :data:`_OUTLINES` (the kneed walker: legs and curved feet, without the
+helper points that mark arc centres and the next step's rolling origin).
 """
 
 from __future__ import annotations
@@ -44,9 +45,35 @@ def _rimless_outline(
     return np.array(segments).T
 
 
+_KNEED_LEGS = ("stance_foot", "stance_knee", "hip", "swing_knee", "swing_foot")
+
+
+def _kneed_outline(model: HybridModel, phase: Phase, x: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """The kneed walker's legs (foot, knee, hip, knee, foot) and, for curved feet, each foot's
+    circular arc of radius ``foot_radius`` about its centre (±0.6 rad about the leg axis)."""
+    names = phase.point_names
+    legs = [pts[:, names.index(n)] for n in _KNEED_LEGS]
+    segments = legs + [[np.nan, np.nan]]
+    radius = float(model.foot_radius)
+    if radius > 0:
+        shank = "q3" if "q3" in phase.states else "q2"  # knee locked: the shank is the thigh
+        angles = {"stance": x[phase.states.index("q1")], "swing": x[phase.states.index(shank)]}
+        sweep = np.linspace(-0.6, 0.6, 13)
+        for leg, angle in angles.items():
+            centre = pts[:, names.index(f"{leg}_centre")]
+            arc = centre[:, None] - radius * np.vstack(
+                [np.sin(angle + sweep), np.cos(angle + sweep)]
+            )
+            segments += list(arc.T) + [[np.nan, np.nan]]
+    return np.array(segments, dtype=float).T
+
+
 # Model-specific outlines (model name -> outline(model, phase, x, points) -> 2×M, NaN breaks);
 # every other model is drawn as the polyline through its points in declared order.
-_OUTLINES: dict[str, Callable[..., np.ndarray]] = {"rimless_wheel": _rimless_outline}
+_OUTLINES: dict[str, Callable[..., np.ndarray]] = {
+    "rimless_wheel": _rimless_outline,
+    "kneed_walker": _kneed_outline,
+}
 
 
 def _check_drawable(model: HybridModel, simulation: Simulation) -> None:

@@ -5,7 +5,11 @@
     gaitopt list [--json]
     gaitopt solve MODEL [--set NAME=VALUE ...] [--guess STATE=VALUE ...] [--steps K]
                         [--method newton|ipopt] [--json]
-    gaitopt simulate MODEL [--set NAME=VALUE ...] [--x0 STATE=VALUE ...] [--steps N] [--json]
+    gaitopt simulate MODEL [--set NAME=VALUE ...] [--x0 STATE=VALUE ...] [--steps N]
+                           [--controller lqr|acker|deadbeat|blind] [--terrain SEED:AMPLITUDE]
+                           [--json]
+    gaitopt control MODEL --kind lqr|acker|deadbeat [--set ...] [--guess ...] [--target ...]
+                          [--q Q] [--r R] [--poles P] [--from STATE=VALUE ...] [--json]
 
 Exit status (DESIGN.md, public contract): 0 gait found / simulation completed; 1 no gait found
 (the JSON is still printed, with ``success: false``) or the simulation did not complete; 2 bad
@@ -35,7 +39,7 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from .errors import GuessError, ParameterError, StateError, did_you_mean
+from .errors import GaitoptInputError, GuessError, ParameterError, StateError, did_you_mean
 from .files import jsonable
 from .hybrid import HybridModel
 from .models import REGISTRY
@@ -418,6 +422,25 @@ def _simulate_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="N",
         help="returns to the section to simulate (default 10)",
     )
+    parser.add_argument(
+        "--controller",
+        choices=("lqr", "acker", "deadbeat", "blind"),
+        help="step-to-step controller around the model's gait (default: open loop at the "
+        "nominal input); blind: the SLIP's swing-leg law, deadbeat on unknown ground",
+    )
+    parser.add_argument(
+        "--target",
+        action="append",
+        metavar="STATE=VALUE",
+        help="with --controller: drive to this section point instead of the gait's fixed point "
+        "(e.g. slip: --target z=1.0)",
+    )
+    parser.add_argument(
+        "--terrain",
+        metavar="SEED:AMPLITUDE",
+        help="seeded random ground: each step the ground parameter (slip: ground_height, m; "
+        "walkers: slope, rad) drawn within ±AMPLITUDE of its value",
+    )
 
 
 def describe_simulation(model: HybridModel, sim: Simulation, requested: int) -> dict[str, Any]:
@@ -458,17 +481,276 @@ def _print_simulation(report: Mapping[str, Any]) -> None:
         print(f"    {entry['t']:12.6f}{values}")
 
 
+def parse_terrain(model: HybridModel, text: str | None):
+    """``--terrain SEED:AMPLITUDE`` as a :class:`gaitopt.terrain.RandomTerrain` (or ``None``)."""
+    if text is None:
+        return None
+    from .terrain import random_terrain
+
+    seed, sep, amplitude = (part.strip() for part in text.partition(":"))
+    example = "--terrain 1:0.05"
+    try:
+        seed_value, amplitude_value = int(seed), float(amplitude)
+    except ValueError:
+        seed_value, amplitude_value = -1, math.nan
+    if not sep or seed_value < 0 or not (math.isfinite(amplitude_value) and amplitude_value >= 0):
+        raise InputError(
+            f"--terrain {text}: expected SEED:AMPLITUDE (a non-negative integer seed and a "
+            f"non-negative amplitude), e.g. {example}"
+        )
+    try:
+        return random_terrain(model, seed_value, amplitude_value)
+    except GaitoptInputError as exc:
+        raise InputError(f"--terrain {text}: {exc}") from None
+
+
+def _simulation_controller(model: HybridModel, kind: str | None, target):
+    """The model to simulate and its policy for ``--controller`` (open loop: ``None``)."""
+    if kind is None:
+        if target is not None:
+            raise InputError("--target needs --controller (open loop runs at the nominal input)")
+        return model, None, None
+    from .control import ControlDesignError, NoGaitError, deadbeat, design_controller
+    from .terrain import BlindPolicy
+
+    try:
+        with _solver_output_to_stderr():
+            if kind == "blind":
+                if model.name != "slip":
+                    raise ControlDesignError(
+                        f"the blind swing-leg policy is for slip only, not {model.name}; "
+                        f"use --controller lqr or deadbeat"
+                    )
+                controller = deadbeat(model, target=target)
+                policy = BlindPolicy(controller, heights=(-0.1, 0.1))
+                return policy.model(), policy, controller
+            controller = design_controller(model, kind, target=target)
+    except ControlDesignError as exc:
+        raise InputError(f"--controller {kind}: {exc}") from None
+    except NoGaitError as exc:
+        raise _NoGait(str(exc)) from None
+    return model, controller, controller
+
+
+class _NoGait(Exception):
+    """No gait to control: exit 1."""
+
+
 def run_simulate(args: argparse.Namespace) -> int:
     """``gaitopt simulate``: simulate the hybrid model and report each return to the section."""
     model = build_model(args.model, args.set)
     x0 = parse_x0(model, args.x0)
-    sim = simulate(model, x0, steps=args.steps)
+    terrain = parse_terrain(model, args.terrain)
+    target = parse_guess(model, args.target) if args.target else None
+    try:
+        simulated, policy, controller = _simulation_controller(model, args.controller, target)
+    except _NoGait as exc:
+        print(f"{PROG}: {exc}", file=sys.stderr)
+        return EXIT_NOT_FOUND
+    sim = simulate(simulated, x0, steps=args.steps, inputs=policy, terrain=terrain)
     report = describe_simulation(model, sim, args.steps)
+    if args.controller is not None or terrain is not None:
+        report["controller"] = (
+            None
+            if controller is None
+            else {
+                "kind": args.controller,
+                "target": dict(
+                    zip(model.section.coordinates, map(float, controller.target), strict=True)
+                ),
+                "gain": controller.gain.tolist(),
+            }
+        )
+        report["inputs"] = [
+            dict(zip(simulated.inputs, map(float, arc.u), strict=True))
+            for arc in sim.arcs
+            if arc.phase == 0
+        ]
+        report["terrain"] = sim.step_parameters
     if args.json:
         _print_json(report)
     else:
         _print_simulation(report)
     return EXIT_OK if sim.success else EXIT_NOT_FOUND
+
+
+# -- gaitopt control -----------------------------------------------------------------------------
+def _control_arguments(parser: argparse.ArgumentParser) -> None:
+    _model_arguments(parser)
+    parser.add_argument(
+        "--kind",
+        required=True,
+        choices=("lqr", "acker", "deadbeat"),
+        help="discrete LQR (python-control dlqr), pole placement (acker) or deadbeat",
+    )
+    parser.add_argument(
+        "--guess",
+        action="append",
+        metavar="STATE=VALUE",
+        help="guess of the gait to control (section coordinates, repeatable)",
+    )
+    parser.add_argument(
+        "--target",
+        action="append",
+        metavar="STATE=VALUE",
+        help="make this section point the fixed point (solving for the nominal input; as many "
+        "inputs as section coordinates, e.g. slip: --target z=1.0)",
+    )
+    parser.add_argument(
+        "--q", metavar="Q", help="LQR state weight: a number or comma-separated diagonal"
+    )
+    parser.add_argument(
+        "--r", metavar="R", help="LQR input weight: a number or comma-separated diagonal"
+    )
+    parser.add_argument(
+        "--poles",
+        metavar="P",
+        help="acker: comma-separated closed-loop multipliers (default all 0)",
+    )
+    parser.add_argument(
+        "--from",
+        dest="start",
+        action="append",
+        metavar="STATE=VALUE",
+        help="decide the input from this section state (repeatable) and take one step",
+    )
+
+
+def _numbers(option: str, text: str | None, kind: type = float) -> list | None:
+    """``--q 1,2,3``: a list of finite numbers (``None`` if the option is absent)."""
+    if text is None:
+        return None
+    values = []
+    for part in text.split(","):
+        try:
+            value = kind(part.strip().replace("i", "j"))
+        except ValueError:
+            raise InputError(
+                f"{option} {text}: {part.strip()!r} is not a number; e.g. {option} 1,0.5"
+            ) from None
+        if not np.isfinite(value):
+            raise InputError(f"{option} {text}: {part.strip()!r} is not finite")
+        values.append(value)
+    return values
+
+
+def _describe_decision(controller, decision, sim: Simulation | None) -> dict[str, Any]:
+    model = controller.model
+    out: dict[str, Any] = {
+        "from": dict(zip(model.section.coordinates, map(float, decision.state), strict=True)),
+        "input": dict(zip(model.inputs, map(float, decision.input), strict=True)),
+        "decision_success": bool(decision.success),
+        "decision": decision.message,
+        "predicted": dict(
+            zip(model.section.coordinates, map(float, decision.predicted), strict=True)
+        ),
+        "next": None,
+    }
+    if sim is not None and sim.success:
+        x = sim.section_states[-1]
+        out["next"] = dict(zip(model.state_names, map(float, x), strict=True))
+        out["next_error"] = float(
+            np.max(np.abs(model.section_coordinates_of(x) - controller.target))
+        )
+    elif sim is not None:
+        out["step"] = sim.message
+    return out
+
+
+def run_control(args: argparse.Namespace) -> int:
+    """``gaitopt control``: design a step-to-step controller around the model's gait."""
+    from .control import ControlDesignError, NoGaitError, design_controller
+
+    model = build_model(args.model, args.set)
+    guess = parse_guess(model, args.guess)
+    target = parse_guess(model, args.target) if args.target else None
+    if target is not None:
+        target = {**{k: v for k, v in model.default_start().items()}, **target}
+    options: dict[str, Any] = {}
+    q, r = _numbers("--q", args.q), _numbers("--r", args.r)
+    poles = _numbers("--poles", args.poles, complex)
+    for option, value, kind in (("--q", q, "lqr"), ("--r", r, "lqr"), ("--poles", poles, "acker")):
+        if value is not None and args.kind != kind:
+            raise InputError(f"{option} applies to --kind {kind}, not --kind {args.kind}")
+    if args.kind == "lqr":
+        options.update(Q=q if q is None or len(q) > 1 else q[0])
+        options.update(R=r if r is None or len(r) > 1 else r[0])
+    if args.kind == "acker" and poles is not None:
+        options["poles"] = poles
+    start = None
+    if args.start:
+        start = _assignments("--from", args.start, _state_examples(model))
+        for name, (item, _) in start.items():
+            if name not in model.section.coordinates:
+                coordinates = model.section.coordinates
+                raise InputError(
+                    f"--from {item}: {did_you_mean(name, coordinates)}--from takes the section "
+                    f"coordinates {', '.join(repr(c) for c in coordinates)} (the other states "
+                    f"follow from the section)"
+                )
+    try:
+        with _solver_output_to_stderr():
+            controller = design_controller(model, args.kind, guess=guess, target=target, **options)
+    except NoGaitError as exc:
+        report = {"model": model.name, "params": model.params, "kind": args.kind,
+                  "success": False, "message": str(exc)}  # fmt: skip
+        if args.json:
+            _print_json(report)
+        else:
+            _print_rows([("model", model.name), ("success", False), ("message", str(exc))])
+        return EXIT_NOT_FOUND
+    except (ControlDesignError, GaitoptInputError) as exc:
+        raise InputError(f"--kind {args.kind}: {exc}") from None
+    report = controller.as_dict()
+    status = EXIT_OK
+    if start is not None:
+        s = model.section_vector({name: value for name, (_, value) in start.items()})
+        decision = controller.decide(s)
+        sim = simulate(model, model.lift(s), steps=1, inputs=decision.input)
+        report.update(_describe_decision(controller, decision, sim))
+        if not (decision.success and sim.success):
+            status = EXIT_NOT_FOUND
+            report["success"] = False
+            report["message"] = (
+                decision.message if not decision.success else f"the step falls: {sim.message}"
+            )
+    if args.json:
+        _print_json(report)
+    else:
+        _print_control(report)
+    return status
+
+
+def _print_control(report: Mapping[str, Any]) -> None:
+    _print_rows(
+        [
+            ("model", report["model"]),
+            ("params", _format_params(report["params"])),
+            ("kind", report["kind"]),
+            ("success", report["success"]),
+            ("message", report["message"]),
+        ]
+    )
+    print("fixed point")
+    for name, value in report["fixed_point"].items():
+        print(f"    {name:<12}{value: .10g}")
+    print("nominal input")
+    for name, value in report["nominal_input"].items():
+        print(f"    {name:<12}{value: .10g}")
+    print(
+        f"gain K       {report['gain']}  (u = u* − K (s − s*), s = {report['section_coordinates']})"
+    )
+    for label in ("open_loop_multipliers", "closed_loop_multipliers"):
+        print(label.replace("_", " "))
+        for re_, im in report[label]:
+            print(f"    {re_: .8f} {im:+.8f}j    |λ| = {math.hypot(re_, im):.8f}")
+    if "feasible_range" in report and report["feasible_range"]:
+        for name, (lo, hi) in report["feasible_range"].items():
+            print(f"feasible     {lo:.6g} ≤ {name} ≤ {hi:.6g} (deadbeat reaches the target)")
+    if "input" in report:
+        print(f"from         {report['from']}")
+        print(f"input        {report['input']}  ({report['decision']})")
+        print(f"next         {report['next']}")
 
 
 # -- the command ---------------------------------------------------------------------------------
@@ -479,6 +761,11 @@ SUBCOMMANDS: dict[str, Subcommand] = {
     ),
     "simulate": Subcommand(
         "simulate a model and print its returns to the section", _simulate_arguments, run_simulate
+    ),
+    "control": Subcommand(
+        "design a step-to-step controller (LQR, pole placement, deadbeat) around a gait",
+        _control_arguments,
+        run_control,
     ),
 }
 

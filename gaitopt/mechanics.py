@@ -8,7 +8,10 @@ References: Lagrange's equations ``d/dt ∂L/∂q̇ − ∂L/∂q = τ`` with ``
 Robotics, Tedrake, appendix "Multi-body dynamics"); impacts by the floating-base method
 (Westervelt et al. 2007, "Feedback Control of Dynamic Bipedal Robot Locomotion", §3.4.2;
 Hurmuzlu & Marghitu 1994): with the stance foot added as free coordinates, the impulse ``Λ`` at the
-striking foot solves ``M_e (q̇⁺ − q̇⁻) = J_cᵀ Λ``, ``J_c q̇⁺ = 0``.
+striking foot solves ``M_e (q̇⁺ − q̇⁻) = J_cᵀ Λ``, ``J_c q̇⁺ = 0``.  An impact that locks a joint
+(the kneed walker's knee strike) is the same equation without the floating base, with ``J`` the
+gradient of the locked relative rate (:func:`constrained_impact_velocity`; Westervelt et al. 2007,
+§3.4.2, with an internal instead of a ground constraint).
 """
 
 from __future__ import annotations
@@ -23,6 +26,8 @@ __all__ = [
     "potential_energy",
     "lagrange_acceleration",
     "impact_velocity",
+    "constrained_impact_velocity",
+    "mass_matrix",
     "bodies_function",
 ]
 
@@ -91,12 +96,75 @@ def solve_small(A: ca.SX, b: ca.SX) -> ca.SX:
     return ca.solve(A, b)
 
 
-def impact_velocity(masses: Sequence[PointMass], q: ca.SX, qd: ca.SX, contact: ca.SX) -> ca.SX:
+def mass_matrix(masses: Sequence[PointMass], q: ca.SX) -> ca.SX:
+    """``M(q) = Σ m_i J_iᵀ J_i`` with ``J_i = ∂r_i/∂q`` (kg·m², or kg·m for mixed coordinates)."""
+    M = 0
+    for m, r in masses:
+        J = ca.jacobian(r, q)
+        M = M + m * (J.T @ J)
+    return M
+
+
+def _plastic(M: ca.SX, J: ca.SX, qd_minus: ca.SX) -> ca.SX:
+    """Solve ``M (q̇⁺ − q̇⁻) = Jᵀ Λ``, ``J q̇⁺ = 0`` for ``q̇⁺`` (KKT system)."""
+    n, k = M.shape[0], J.shape[0]
+    K = ca.blockcat([[M, -J.T], [J, ca.SX.zeros(k, k)]])
+    rhs = ca.vertcat(M @ qd_minus, ca.SX.zeros(k, 1))
+    return ca.solve(K, rhs)[:n]
+
+
+def constrained_impact_velocity(
+    masses: Sequence[PointMass], q: ca.SX, qd: ca.SX, constraint_rate: ca.SX
+) -> ca.SX:
+    """Post-impact velocities for a plastic impact that enforces ``constraint_rate = 0``.
+
+    ``constraint_rate`` is an expression linear in ``qd`` (``J(q) q̇``), e.g. a joint's relative
+    rate ``q̇₃ − q̇₂`` for a knee that locks.  Contacts already built into the coordinates (a
+    pinned or rolling stance foot) persist and take whatever impulse they need; the impulse of
+    the new constraint is ``Jᵀ Λ``: ``M (q̇⁺ − q̇⁻) = Jᵀ Λ``, ``J q̇⁺ = 0`` (Westervelt et al. 2007,
+    §3.4.2).  Since ``Λ`` is internal to the locking joint and the contact impulses act at the
+    contact point, the angular momentum of the whole system about that point is conserved, and so
+    is that of the part beyond the joint about its proximal joint (the tests check both).
+
+    Parameters
+    ----------
+    masses : sequence of PointMass
+        Masses and positions (expressions of ``q``).
+    q, qd : casadi.SX
+        Generalised coordinates and velocities just before impact.
+    constraint_rate : casadi.SX
+        ``J(q) q̇`` (k×1), linear in ``qd``.
+
+    Returns
+    -------
+    casadi.SX
+        ``q̇⁺`` in the same coordinates.
+    """
+    J = ca.jacobian(constraint_rate, qd)
+    return _plastic(mass_matrix(masses, q), J, qd)
+
+
+def impact_velocity(
+    masses: Sequence[PointMass],
+    q: ca.SX,
+    qd: ca.SX,
+    contact: ca.SX,
+    *,
+    contact_slip: ca.SX | None = None,
+) -> ca.SX:
     """Post-impact generalised velocities for a plastic impact of point ``contact``.
 
     The stance foot is added as two free coordinates (floating base); before impact it is at rest.
     The striking point sticks (``J_c q̇_e⁺ = 0``) and the old stance foot is assumed to leave the
     ground (no impulse there).  Positions are relative to the stance foot.
+
+    For a curved foot the material point that touches the ground is not the point whose position
+    ``contact`` describes as a function of ``q`` (the touching point moves over the arc as the
+    foot rotates).  ``contact_slip`` is the difference of their velocities, linear in ``qd``: for
+    an arc of radius ``R`` on a line with unit tangent ``t``, on a body whose angle ``θ`` grows
+    clockwise, the material point at the contact moves at ``d(contact)/dt − R θ̇ t``, so
+    ``contact_slip = −R θ̇ t`` (the rolling condition).  Then ``J_c = ∂(contact)/∂q_e +
+    ∂(contact_slip)/∂q̇_e``.
 
     Parameters
     ----------
@@ -106,6 +174,9 @@ def impact_velocity(masses: Sequence[PointMass], q: ca.SX, qd: ca.SX, contact: c
         Generalised coordinates and velocities just before impact.
     contact : casadi.SX
         Position of the striking point (expression of ``q``), relative to the stance foot.
+    contact_slip : casadi.SX, optional
+        Velocity of the striking material point minus ``d(contact)/dt`` (2×1, linear in ``qd``);
+        default zero (a point foot).
 
     Returns
     -------
@@ -119,6 +190,8 @@ def impact_velocity(masses: Sequence[PointMass], q: ca.SX, qd: ca.SX, contact: c
     floating = [(m, r + base) for m, r in masses]
     M = ca.hessian(kinetic_energy(floating, qe, qde), qde)[0]
     J = ca.jacobian(contact + base, qe)
+    if contact_slip is not None:
+        J = J + ca.jacobian(contact_slip, qde)
     n = qe.shape[0]
     K = ca.blockcat([[M, -J.T], [J, ca.SX.zeros(2, 2)]])
     qde_minus = ca.vertcat(0, 0, qd)

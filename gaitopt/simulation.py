@@ -36,6 +36,8 @@ _METHODS = {"DOP853": DOP853, "RK45": RK45, "Radau": Radau, "LSODA": LSODA}
 _ARM = 1e-10
 
 InputPolicy = Callable[[int, np.ndarray], np.ndarray]
+#: ``terrain(step) -> {parameter: value}``: parameters changed for one step (rough ground).
+Terrain = Callable[[int], Mapping[str, float]]
 
 
 @dataclass
@@ -110,6 +112,8 @@ class Simulation:
         Times of the returns to the section (the first entry is the start).
     section_states : numpy.ndarray
         Phase-0 states at those returns (rows).
+    step_parameters : list of dict
+        With a ``terrain``: the parameters it changed for each step begun (step k from return k).
     """
 
     success: bool
@@ -119,6 +123,7 @@ class Simulation:
     events: list[Event] = field(default_factory=list)
     section_times: np.ndarray = field(default_factory=lambda: np.zeros(0))
     section_states: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    step_parameters: list[dict[str, float]] = field(default_factory=list)
 
     @property
     def steps(self) -> int:
@@ -187,6 +192,7 @@ def simulate(
     rtol: float = 1e-11,
     atol: float = 1e-12,
     max_phase_time: float = 30.0,
+    terrain: Terrain | None = None,
 ) -> Simulation:
     """Simulate a hybrid model for a number of steps.
 
@@ -211,6 +217,11 @@ def simulate(
         Integrator tolerances.
     max_phase_time : float
         A phase that lasts longer than this (s) ends the simulation with ``status="timeout"``.
+    terrain : callable, optional
+        ``terrain(step) -> {parameter: value}``, called as step ``step`` begins (at the start and
+        at each return to the section, after the input policy, which does not see it): those
+        parameters hold for that step, e.g. the SLIP's ``ground_height`` or a walker's ``slope``
+        (unknown per-step ground changes).  Default: the model's parameters throughout.
 
     Returns
     -------
@@ -221,15 +232,31 @@ def simulate(
     if int(steps) != steps or steps < 0:
         raise GaitoptInputError(f"`steps` must be a non-negative integer, got {steps!r}")
     x = _initial_state(model, x0, phase)
-    p = model.p
     policy = _as_policy(model, inputs)
+    step_parameters: list[dict[str, float]] = []
+
+    def parameters(step: int) -> np.ndarray:
+        if terrain is None:
+            return model.p
+        changes = {k: float(v) for k, v in dict(terrain(step)).items()}
+        known = model.params
+        unknown = [k for k in changes if k not in known]
+        if unknown:
+            raise GaitoptInputError(
+                f"`terrain` returned unknown parameter {unknown[0]!r} at step {step}; "
+                f"{model.name}'s parameters: {', '.join(known)}"
+            )
+        step_parameters.append(changes)
+        return model.replace(**changes).p
+
     solver_cls = _METHODS[method]
 
     sim = Simulation(False, "completed", "")
     sec_t: list[float] = []
     sec_x: list[np.ndarray] = []
     t = 0.0
-    u = policy(0, x) if phase == 0 else policy(0, x)
+    u = policy(0, x)
+    p = parameters(0)
     if phase == 0:
         sec_t.append(t)
         sec_x.append(x.copy())
@@ -265,11 +292,13 @@ def simulate(
             sec_x.append(x.copy())
             if len(sec_t) - 1 < steps:
                 u = policy(len(sec_t) - 1, x)
+                p = parameters(len(sec_t) - 1)
     sim.success = sim.status == "completed"
     if sim.success:
         sim.message = f"{len(sec_t) - 1} steps in {t:.6g} s"
     sim.section_times = np.array(sec_t)
     sim.section_states = np.array(sec_x) if sec_x else np.zeros((0, len(model.state_names)))
+    sim.step_parameters = step_parameters
     return sim
 
 

@@ -12,6 +12,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from gaitopt.cli import SUBCOMMANDS, main
@@ -68,7 +69,7 @@ def test_list_text_names_every_model(capsys):
 
 
 def test_subcommands_are_a_table():
-    assert {"list", "solve", "simulate"} <= set(SUBCOMMANDS)
+    assert {"list", "solve", "simulate", "control"} <= set(SUBCOMMANDS)
 
 
 # -- solve --------------------------------------------------------------------------------------
@@ -237,3 +238,70 @@ def test_console_script_bad_input(tmp_path):
     assert "Traceback" not in proc.stderr
     assert len(proc.stderr.splitlines()) == 1, proc.stderr
     assert proc.stderr.startswith("gaitopt: error: --set slope=abc: ")
+
+
+# -- running and control (issue 3) --------------------------------------------------------------
+@pytest.mark.parametrize(("z", "stable"), [(0.87, True), (0.92, False)])
+def test_solve_slip_textbook_fixed_points(capsys, z, stable):
+    # Source: DESIGN.md "Reference numbers" (Tedrake's SLIP apex map): a stable fixed point near
+    # z = 0.87 m and an unstable one near 0.92 m; "near": within 1 cm.
+    status, result = run_json(capsys, "solve", "slip", "--guess", f"z={z}", "--json")
+    assert status == 0 and result["success"] is True
+    assert abs(result["fixed_point"]["z"] - z) < 0.01
+    assert result["stable"] is stable and len(result["multipliers"]) == 1
+
+
+def test_control_slip_deadbeat_from_a_state(capsys):
+    status, report = run_json(capsys, "control", "slip", "--kind", "deadbeat", "--from", "z=0.9",
+                              "--json")  # fmt: skip
+    assert status == 0
+    assert set(report) >= {"fixed_point", "gain", "closed_loop_multipliers", "input", "next"}
+    assert list(report["input"]) == ["touchdown_angle"]
+    # One deadbeat step lands on the target apex: 1e-9 (shooting accuracy 1e-10, rtol 1e-11).
+    assert abs(report["next"]["z"] - report["fixed_point"]["z"]) < 1e-9
+    assert max(math.hypot(*z) for z in report["closed_loop_multipliers"]) < 1e-12
+
+
+def test_control_compass_gait_lqr_closed_loop_multipliers(capsys):
+    status, report = run_json(capsys, "control", "compass_gait", "--kind", "lqr", "--q", "1,1,1",
+                              "--r", "0.1", "--set", "slope=0.09", "--json")  # fmt: skip
+    assert status == 0
+    A, B, K = (np.array(report[k]) for k in ("A", "B", "gain"))
+    expected = np.sort(np.abs(np.linalg.eigvals(A - B @ K)))
+    got = np.sort([math.hypot(*z) for z in report["closed_loop_multipliers"]])
+    np.testing.assert_allclose(got, expected, atol=1e-12)
+    assert got.max() < 1 < max(math.hypot(*z) for z in report["open_loop_multipliers"])
+
+
+def test_control_from_outside_the_deadbeat_range_exits_1(capsys):
+    status, out, err = run(capsys, "control", "slip", "--kind", "deadbeat", "--from", "z=0.8")
+    assert status == 1 and err == ""
+    assert "deadbeat infeasible" in out and "deadbeat works for" in out
+
+
+def test_simulate_with_controller_on_rough_terrain(capsys):
+    status, report = run_json(capsys, "simulate", "slip", "--controller", "deadbeat", "--target",
+                              "z=1.0", "--x0", "z=1.0", "--terrain", "4:0.02", "--steps", "3",
+                              "--json")  # fmt: skip
+    assert status == 0 and report["steps"] == 3
+    assert report["controller"]["kind"] == "deadbeat"
+    assert len(report["inputs"]) == 3 and len(report["terrain"]) == 3
+    assert all(abs(t["ground_height"]) <= 0.02 for t in report["terrain"])
+
+
+BAD_CONTROL_INPUT = [
+    (["control", "compass_gait", "--kind", "deadbeat"], ["--kind deadbeat", "as many inputs"]),
+    (["control", "vanderpol", "--kind", "lqr"], ["--kind lqr", "no per-step input"]),
+    (["control", "slip", "--kind", "lqr", "--q", "abc"], ["--q abc", "not a number"]),
+    (["control", "slip", "--kind", "acker", "--q", "1"], ["--q", "--kind lqr"]),
+    (["control", "slip", "--kind", "lqr", "--from", "x_dot=1"], ["--from x_dot=1", "'z'"]),
+    (["control", "slip", "--kind", "pid"], ["--kind", "'pid'"]),
+    (["simulate", "slip", "--terrain", "1"], ["--terrain 1", "SEED:AMPLITUDE"]),
+    (["simulate", "vanderpol", "--terrain", "1:0.1"], ["--terrain 1:0.1", "no ground parameter"]),
+    (["simulate", "compass_gait", "--controller", "blind"], ["--controller blind", "slip only"]),
+]
+
+
+@pytest.mark.parametrize(("argv", "expected"), BAD_CONTROL_INPUT, ids=lambda v: " ".join(v))
+def test_bad_control_input_is_one_line_and_exit_2(capsys, argv, expected):
+    test_bad_input_is_one_line_and_exit_2(capsys, argv, expected)

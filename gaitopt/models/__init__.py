@@ -5,14 +5,20 @@ from __future__ import annotations
 from ..errors import ParameterError, UnknownModelError, did_you_mean
 from ..hybrid import HybridModel
 from .compass_gait import CompassGait
+from .kneed_walker import KneedWalker
 from .rimless_wheel import RimlessWheel
 from .simplest_walker import SimplestWalker
+from .slip import Slip
 from .vanderpol import VanDerPol
 
-__all__ = ["REGISTRY", "model", "CompassGait", "RimlessWheel", "SimplestWalker", "VanDerPol"]
+__all__ = [
+    "REGISTRY", "model", "CompassGait", "KneedWalker", "RimlessWheel", "SimplestWalker", "Slip",
+    "VanDerPol",
+]  # fmt: skip
 
 REGISTRY: dict[str, type[HybridModel]] = {
-    cls.name: cls for cls in (VanDerPol, RimlessWheel, CompassGait, SimplestWalker)
+    cls.name: cls
+    for cls in (VanDerPol, RimlessWheel, CompassGait, KneedWalker, SimplestWalker, Slip)
 }
 
 

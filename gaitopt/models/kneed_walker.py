@@ -1,0 +1,382 @@
+"""The kneed walker: a passive biped whose swing knee folds, then locks; point or curved feet.
+
+Hsu Chen 2007 ("Passive dynamic walking with knees: a point foot model", MIT thesis; the
+model and parameters of Tedrake's *Underactuated Robotics*, ch. "Simple models of walking and
+running", § "the kneed walker"), after McGeer 1990 ("Passive walking with knees", Proc. IEEE ICRA:
+knees, and curved feet that roll).
+
+**Geometry** (Hsu Chen's convention; distances measured along each link from its lower end).
+Each leg is a shank of length ``l_s = a1 + b1`` and a thigh of length ``l_t = a2 + b2`` joined at
+the knee; leg length ``L = l_s + l_t`` (1 m at the defaults).  Point masses: the hip ``m_h``; on
+each leg a shank mass ``m_s`` at ``a1`` above the foot (``b1`` below the knee) and a thigh mass
+``m_t`` at ``a2`` above the knee (``b2`` below the hip).  The stance leg's knee stays locked.
+
+**State** (DESIGN.md): ``q1`` stance leg, ``q2`` swing thigh, ``q3`` swing shank, absolute angles
+from vertical in the compass gait's (Drake's) sign convention: a link's angle is that of the
+vector from its lower to its upper end, positive when it leans downhill (+x).  The swing knee is
+flexed (foot trailing) when ``q3 > q2``.
+
+**Curved feet** (McGeer 1990): each leg ends in a circular arc of radius ``R = foot_radius``
+centred on the leg axis ``R`` above the foot end (so the leg is still ``L`` from the hip to its
+lowest point).  The stance arc rolls without slipping on the slope (unit tangent
+``t = (cos γ, −sin γ)`` downhill, normal ``n = (sin γ, cos γ)``): its contact point is
+``R (q1 − γ) t`` from the origin ``O`` (where it touches when the leg is normal to the slope), the
+arc centre ``R n`` above that.  Rolling on a line is a holonomic constraint, so every position is
+a function of the angles and the Lagrangian needs no multiplier; ``R = 0`` is the point foot,
+term by term.  Positions, points and energies are relative to ``O`` (the stance foot for ``R = 0``).
+
+**Phases.** (0) *three-link swing* (6 states, after heel strike): stance leg, free swing thigh and
+shank.  Ends at **knee strike**: ``q2 − q3`` increases through 0 (the trailing shank comes in line
+with the thigh); a plastic impact locks the knee, ``M (q̇⁺ − q̇⁻) = Jᵀ Λ``, ``J q̇⁺ = 0`` with
+``J = ∂(q̇3 − q̇2)/∂q̇`` (:func:`~gaitopt.mechanics.constrained_impact_velocity`): the angular
+momentum of the whole walker about the stance contact and of the swing leg about the hip are
+conserved (the two conservation laws behind Hsu Chen's knee-strike equations; at R = 0 the reset
+agrees with her Q⁺ q̇⁺ = Q⁻ q̇⁻ form to rounding).
+(1) *two-link swing* (4 states ``q1, q2, q1_dot, q2_dot``, knee locked: the compass gait with the
+kneed mass distribution).  Ends at **heel strike**: the swing foot's height above the slope is
+``h = −2 (L − R) sin((q1 + q2)/2 − γ) sin((q1 − q2)/2)`` (for both point and curved feet: the arc
+centres are both ``L − R`` from the hip and the stance centre is ``R`` above the slope).  It
+vanishes at touchdown ahead, ``q1 + q2 = 2γ``, and where the legs pass each other, ``q1 = q2``.
+The guard is the first factor, ``2γ − q1 − q2`` decreasing through 0 (the compass gait's), and the
+spurious-crossing rule admits it only with the swing foot ahead, ``q1 − q2 > 0``: the mid-swing
+scuff (the second factor, a locked leg's foot passing the stance foot) and a touchdown behind the
+stance foot are excluded explicitly, as in Drake's compass gait.  The impact is the
+floating-base one (:func:`~gaitopt.mechanics.impact_velocity`) with the knee locked; for curved
+feet the striking material point obeys the rolling condition (``contact_slip = −R q̇2 t``).  Then
+the legs swap and the new swing knee is released straight, ``q3⁺ = q2⁺``, ``q̇3⁺ = q̇2⁺``.
+Angular momentum is conserved about the new contact (whole walker) and about the hip (the
+trailing leg).
+
+Exits (a gait must not touch them; a simulation stops there): in the three-link phase a *trip*,
+the swing foot's height above the slope falling through 0 before the knee locks (the foot starts
+on the slope and counts only once lifted; for curved feet the height of the full circle's lowest
+point, which is conservative for a foot that is only an arc of it); in both phases a *fall*, the
+stance leg horizontal.
+
+Not modelled: double support, a trailing foot that does not lift off, or a
+released knee that does not flex (the knee would stay locked).  On the gait the trailing foot
+rises at 0.28 m/s just after heel strike and the knee flexes at once (the tests check the knee
+stays flexed through the three-link phase); ``problems/kneed_walker_feet.py`` counts perturbed
+states that violate either as failures.
+
+**Section:** just after heel strike, ``q2 = q3 = 2γ − q1`` and ``q̇3 = q̇2``; free coordinates
+``q1, q1_dot, q2_dot`` (3 nontrivial multipliers).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+from ..errors import ParameterError
+from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
+from ..mechanics import (
+    bodies_function,
+    constrained_impact_velocity,
+    impact_velocity,
+    kinetic_energy,
+    lagrange_acceleration,
+    potential_energy,
+)
+from ..parameters import parameter
+
+__all__ = ["KneedWalker"]
+
+_HSU_CHEN = "Hsu Chen 2007, as in Tedrake's Underactuated Robotics (kneed walker)"
+
+#: Names of the drawing points of both phases (columns of ``Phase.points``).
+POINT_NAMES = (
+    "stance_foot",
+    "stance_knee",
+    "hip",
+    "swing_knee",
+    "swing_foot",
+    "stance_centre",
+    "swing_centre",
+    "swing_origin",
+)
+#: Order of the point masses in ``Phase.bodies`` (for momentum checks of subsystems).
+BODY_NAMES = ("hip", "stance_shank", "stance_thigh", "swing_thigh", "swing_shank")
+
+
+def _unit(angle: ca.SX) -> ca.SX:
+    """Unit vector along a link leaning ``angle`` from vertical towards +x (lower → upper end)."""
+    return ca.vertcat(ca.sin(angle), ca.cos(angle))
+
+
+def _walker(sym: Symbols, q1: ca.SX, q2: ca.SX, q3: ca.SX) -> dict[str, ca.SX]:
+    """Positions (relative to the rolling origin ``O``) of the masses and drawing points.
+
+    ``q3 = q2`` gives the knee-locked walker.
+    """
+    R, gamma = sym.foot_radius, sym.slope
+    ls = sym.a1 + sym.b1  # shank length
+    lt = sym.a2 + sym.b2  # thigh length
+    L = ls + lt
+    t = ca.vertcat(ca.cos(gamma), -ca.sin(gamma))  # downhill tangent of the slope
+    n = ca.vertcat(ca.sin(gamma), ca.cos(gamma))  # slope normal
+    stance_contact = R * (q1 - gamma) * t  # rolling without slipping from O
+    stance_centre = stance_contact + R * n
+    stance_foot = stance_centre - R * _unit(q1)  # lower end of the leg axis
+    hip = stance_foot + L * _unit(q1)
+    swing_knee = hip - lt * _unit(q2)
+    swing_foot = swing_knee - ls * _unit(q3)
+    swing_centre = swing_foot + R * _unit(q3)
+    swing_contact = swing_centre - R * n  # the arc's point nearest the slope
+    return {
+        "stance_contact": stance_contact,
+        "stance_centre": stance_centre,
+        "stance_foot": stance_foot,
+        "stance_knee": stance_foot + ls * _unit(q1),
+        "hip": hip,
+        "swing_knee": swing_knee,
+        "swing_foot": swing_foot,
+        "swing_centre": swing_centre,
+        "swing_contact": swing_contact,
+        # Where the swing leg's own rolling origin lies on the slope (its contact point if it were
+        # normal to the slope): the next stance phase's O, for drawing successive steps.
+        "swing_origin": swing_contact - R * (q3 - gamma) * t,
+        # Point masses (BODY_NAMES order).
+        "m_hip": hip,
+        "m_stance_shank": stance_foot + sym.a1 * _unit(q1),
+        "m_stance_thigh": stance_foot + (ls + sym.a2) * _unit(q1),
+        "m_swing_thigh": hip - sym.b2 * _unit(q2),
+        "m_swing_shank": swing_knee - sym.b1 * _unit(q3),
+        "tangent": t,
+        "normal": n,
+    }
+
+
+def _masses(sym: Symbols, geo: dict[str, ca.SX]) -> list[tuple[ca.SX, ca.SX]]:
+    mh, mt, ms = sym.mass_hip, sym.mass_thigh, sym.mass_shank
+    return [
+        (mh, geo["m_hip"]),
+        (ms, geo["m_stance_shank"]),
+        (mt, geo["m_stance_thigh"]),
+        (mt, geo["m_swing_thigh"]),
+        (ms, geo["m_swing_shank"]),
+    ]
+
+
+def _points(sym: Symbols, x: ca.SX, geo: dict[str, ca.SX]) -> ca.Function:
+    return ca.Function("points", [x, sym.p], [ca.horzcat(*[geo[k] for k in POINT_NAMES])])
+
+
+@dataclass(frozen=True)
+class KneedWalker(HybridModel):
+    """Kneed walker: phase 0 states ``q1, q2, q3`` (rad), ``q1_dot, q2_dot, q3_dot`` (rad/s);
+    phase 1 (knee locked) ``q1, q2, q1_dot, q2_dot``."""
+
+    name = "kneed_walker"
+    title = "Kneed walker"
+    reference = "Hsu Chen 2007; McGeer 1990; Tedrake, Underactuated Robotics"
+    mesh = (4, 5)  # 20 RK8 steps per phase: discretisation error ~1e-11 at the defaults
+
+    mass_hip: float = parameter(
+        0.5, unit="kg", doc="hip point mass m_h", source=_HSU_CHEN, low=0.0, high=1e4, low_open=True
+    )
+    mass_thigh: float = parameter(
+        0.5,
+        unit="kg",
+        doc="thigh point mass m_t (each leg)",
+        source=_HSU_CHEN,
+        low=0.0,
+        high=1e4,
+        low_open=True,
+    )
+    mass_shank: float = parameter(
+        0.05,
+        unit="kg",
+        doc="shank point mass m_s (each leg)",
+        source=_HSU_CHEN,
+        low=0.0,
+        high=1e4,
+        low_open=True,
+    )
+    a1: float = parameter(
+        0.375,
+        unit="m",
+        doc="foot to shank mass distance",
+        source=_HSU_CHEN,
+        low=0.0,
+        high=10.0,
+        low_open=True,
+    )
+    b1: float = parameter(
+        0.125,
+        unit="m",
+        doc="shank mass to knee distance",
+        source=_HSU_CHEN,
+        low=0.0,
+        high=10.0,
+        low_open=True,
+    )
+    a2: float = parameter(
+        0.175,
+        unit="m",
+        doc="knee to thigh mass distance",
+        source=_HSU_CHEN,
+        low=0.0,
+        high=10.0,
+        low_open=True,
+    )
+    b2: float = parameter(
+        0.325,
+        unit="m",
+        doc="thigh mass to hip distance",
+        source=_HSU_CHEN,
+        low=0.0,
+        high=10.0,
+        low_open=True,
+    )
+    gravity: float = parameter(
+        9.81,
+        unit="m/s^2",
+        doc="gravitational acceleration g",
+        source="standard gravity",
+        low=0.0,
+        high=100.0,
+        low_open=True,
+    )
+    slope: float = parameter(
+        0.0504,
+        unit="rad",
+        doc="ground slope γ (downhill positive)",
+        source=_HSU_CHEN,
+        low=0.0,
+        high=0.3,
+    )
+    foot_radius: float = parameter(
+        0.0,
+        unit="m",
+        doc="radius R of the circular-arc feet (0: point feet); at most the shank length a1 + b1",
+        source="point foot (Hsu Chen 2007); curved feet after McGeer 1990",
+        low=0.0,
+        high=1.0,
+    )
+
+    def check(self) -> None:
+        shank = self.a1 + self.b1
+        if self.foot_radius > shank:
+            raise ParameterError(
+                f"{self.name}: parameter `foot_radius` = {self.foot_radius:g} m exceeds the shank "
+                f"length a1 + b1 = {shank:g} m (the arc centre must lie on the shank); use "
+                f"foot_radius ≤ {shank:g}"
+            )
+
+    @classmethod
+    def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
+        g, gamma, R = sym.gravity, sym.slope, sym.foot_radius
+
+        # -- phase 0: three-link swing (free knee) ---------------------------------------------
+        names0 = ("q1", "q2", "q3", "q1_dot", "q2_dot", "q3_dot")
+        x0, (q1, q2, q3, q1d, q2d, q3d) = sym.states(*names0)
+        q, qd = ca.vertcat(q1, q2, q3), ca.vertcat(q1d, q2d, q3d)
+        geo0 = _walker(sym, q1, q2, q3)
+        masses0 = _masses(sym, geo0)
+        flow0 = sym.function("flow", x0, ca.vertcat(qd, lagrange_acceleration(masses0, q, qd, g)))
+        # Knee strike: the knee locks; the stance contact (pinned or rolling) persists.
+        locked = constrained_impact_velocity(masses0, q, qd, q3d - q2d)
+        knee_strike = Transition(
+            name="knee strike",
+            guard=sym.function("guard", x0, q2 - q3),
+            direction=+1,
+            reset=sym.function("reset", x0, ca.vertcat(q1, q2, locked[0], locked[1])),
+            target=1,
+            impact=True,
+            doc="q2 − q3 rises through 0 (the flexed knee straightens); plastic impact locking "
+            "the knee: M Δq̇ = Jᵀ Λ, q̇3⁺ = q̇2⁺",
+        )
+        # The swing foot must clear the slope until the knee locks: its height above the slope
+        # (the arc's lowest point; for R = 0 the foot) falling through 0 is a trip.  It starts at
+        # 0 (the trailing foot leaves the ground), so it counts only after the foot has lifted.
+        trip = Transition(
+            name="trip",
+            guard=sym.function("guard", x0, ca.dot(geo0["normal"], geo0["swing_contact"])),
+            direction=-1,
+            reset=None,
+            target=None,
+            doc="the swing foot touches the slope before the knee locks",
+        )
+        fall0 = Transition(
+            name="fall",
+            guard=sym.function("guard", x0, ca.cos(q1)),
+            direction=-1,
+            reset=None,
+            target=None,
+            doc="the stance leg reaches horizontal",
+        )
+        energy0 = sym.conserved(
+            "energy", x0, kinetic_energy(masses0, q, qd) + potential_energy(masses0, g)
+        )
+        phase0 = Phase(
+            "three-link swing",
+            names0,
+            flow0,
+            (knee_strike, trip, fall0),
+            {"energy": energy0},
+            points=_points(sym, x0, geo0),
+            point_names=POINT_NAMES,
+            bodies=bodies_function(masses0, x0, q, qd, sym.p),
+        )
+
+        # -- phase 1: two-link swing (knee locked) -----------------------------------------------
+        names1 = ("q1", "q2", "q1_dot", "q2_dot")
+        x1, (p1, p2, p1d, p2d) = sym.states(*names1)
+        r, rd = ca.vertcat(p1, p2), ca.vertcat(p1d, p2d)
+        geo1 = _walker(sym, p1, p2, p2)
+        masses1 = _masses(sym, geo1)
+        flow1 = sym.function("flow", x1, ca.vertcat(rd, lagrange_acceleration(masses1, r, rd, g)))
+        # Heel strike with the knee locked; the striking arc rolls (no slip) from then on.
+        post = impact_velocity(
+            masses1, r, rd, geo1["swing_contact"], contact_slip=-R * p2d * geo1["tangent"]
+        )
+        heel_strike = Transition(
+            name="heel strike",
+            guard=sym.function("guard", x1, 2 * gamma - p1 - p2),
+            direction=-1,
+            # Legs swap; the new swing knee is released straight (q3 = q2, q̇3 = q̇2).
+            reset=sym.function("reset", x1, ca.vertcat(p2, p1, p1, post[1], post[0], post[0])),
+            target=0,
+            admissible=sym.function("admissible", x1, p1 - p2),
+            foothold="swing_origin",
+            doc="q1 + q2 = 2·slope with the swing foot ahead (q2 < q1; the mid-swing scuff "
+            "q1 = q2 and touchdowns behind are excluded); knee-locked plastic impact; legs swap; "
+            "new swing knee released",
+        )
+        fall1 = Transition(
+            name="fall",
+            guard=sym.function("guard", x1, ca.cos(p1)),
+            direction=-1,
+            reset=None,
+            target=None,
+            doc="the stance leg reaches horizontal",
+        )
+        energy1 = sym.conserved(
+            "energy", x1, kinetic_energy(masses1, r, rd) + potential_energy(masses1, g)
+        )
+        phase1 = Phase(
+            "two-link swing",
+            names1,
+            flow1,
+            (heel_strike, fall1),
+            {"energy": energy1},
+            points=_points(sym, x1, geo1),
+            point_names=POINT_NAMES,
+            bodies=bodies_function(masses1, x1, r, rd, sym.p),
+        )
+
+        # -- section: just after heel strike ----------------------------------------------------
+        s, (s_q1, s_q1d, s_q2d) = sym.states("q1", "q1_dot", "q2_dot")
+        swing = 2 * gamma - s_q1
+        section = Section(
+            ("q1", "q1_dot", "q2_dot"),
+            sym.lift(s, ca.vertcat(s_q1, swing, swing, s_q1d, s_q2d, s_q2d)),
+            "just after heel strike: q2 = q3 = 2·slope − q1, q3_dot = q2_dot",
+        )
+        return (phase0, phase1), section
+
+    def default_start(self) -> dict[str, float]:
+        """A post-heel-strike state near the passive gait at the defaults (rounded)."""
+        return {"q1": -0.19, "q1_dot": 1.1, "q2_dot": 0.06}

@@ -1,0 +1,430 @@
+"""The spring-loaded inverted pendulum (SLIP): a point mass running on a massless spring leg.
+
+Blickhan 1989; Geyer, Seyfarth & Blickhan 2005/2006; Tedrake, *Underactuated Robotics*, ch.
+"Simple models of walking and running", §"The spring-loaded inverted pendulum (SLIP)", whose apex
+map (k̃ = 10.7, θ_td = 30°, Ẽ = 1.61, after Geyer's thesis) fixes the defaults here.
+
+One step, from apex to apex, is three phases:
+
+* **descent** (flight, state ``x, z, x_dot, z_dot``; ``z`` the hip height above the reference
+  level, ``x`` measured from the last apex): ballistic, ``ẍ = 0, z̈ = −g``.  The leg is held at
+  the touchdown angle ``θ_td`` from vertical, foot ahead of the hip; **touchdown** when the foot
+  reaches the ground, ``z − h − l0 cos θ_td = 0`` with ``z`` falling (``h`` = ``ground_height``).
+* **stance** (polar coordinates about the foot, state ``r, theta, r_dot, theta_dot``; ``theta``
+  from vertical, positive when the hip is ahead of the foot, so touchdown is at ``theta = −θ_td``).
+  Lagrangian ``L = ½ m (ṙ² + r² θ̇²) − m g (h + r cos θ) − ½ k (l0 − r)²`` gives (Tedrake's stance
+  equations)::
+
+      r̈ = r θ̇² − g cos θ + (k/m)(l0 − r),      θ̈ = (g sin θ − 2 ṙ θ̇) / r.
+
+  **Liftoff** when the spring regains its rest length, ``r = l0`` while extending.
+* **ascent** (flight, ``x`` now measured from the foot): ballistic up to the **apex**, ``ż = 0``
+  falling, where ``x`` is reset to 0 — the Poincaré section.
+
+Energy ``E = ½ m |v|² + m g z (+ ½ k (l0 − r)² in stance)`` is conserved, so at the apex the
+forward speed follows from the height, ``ẋ = sqrt(2 (E/m − g z))``: the section has the single
+coordinate ``z`` and the apex map ``z[n+1] = P(z[n]; θ_td)`` has one (nontrivial) multiplier.
+Dimensionless numbers (Geyer): ``k̃ = k l0 / (m g)`` and ``Ẽ = E / (m g l0)``.
+
+The map's domain, stated rather than crashed on (each edge is a terminal transition that ends a
+simulation with a named fall, so :func:`gaitopt.returnmap.return_map` is NaN there):
+
+* below the touchdown height, ``z ≤ h + l0 cos θ_td``, the leg cannot be placed: the hip falls
+  to the ground ("apex below touchdown height");
+* with too little forward energy (``z`` near ``E/(m g)``) the stance leg stops rotating and the
+  runner falls back ("falls back": ``θ̇`` reaches 0 in stance; or it lifts off moving backwards);
+  above ``E/(m g)`` no apex exists at this energy: the section's lift then has zero forward
+  speed (more energy than ``energy``), and the simulation reports the fall back.
+
+The touchdown angle is both a parameter (``touchdown_angle``, the nominal value) and the per-step
+input (``u = θ_td``, chosen at each apex by a step-to-step controller): :meth:`Slip.nominal_input`
+returns the parameter.  :class:`SlipSwingLeg` replaces the fixed angle by a swing-leg law
+``θ(t)`` of the time since apex (blind running on rough terrain; :mod:`gaitopt.terrain`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import casadi as ca
+import numpy as np
+
+from ..errors import ParameterError
+from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
+from ..parameters import parameter
+
+__all__ = ["Slip", "SlipSwingLeg", "SWING_LAW_DEGREE"]
+
+_TEDRAKE = "Tedrake, Underactuated Robotics, SLIP apex map (after Geyer 2005)"
+_M, _G, _L0 = 80.0, 9.81, 1.0
+#: Degree of the Chebyshev swing-leg law of :class:`SlipSwingLeg`.
+SWING_LAW_DEGREE = 8
+
+
+def _build(cls: type[HybridModel], sym: Symbols, angle_law) -> tuple[tuple[Phase, ...], Section]:
+    """The three phases and the apex section; ``angle_law(z_dot)`` is the leg angle in descent
+    (a function of the time since apex ``t = −ż/g``)."""
+    m, l0, k, g, E, h = (
+        sym.mass,
+        sym.rest_length,
+        sym.stiffness,
+        sym.gravity,
+        sym.energy,
+        sym.ground_height,
+    )
+    # Drawing functions take (x, p) only: the flight leg is drawn at the parameter angle.
+    drawn_angle = sym.touchdown_angle
+
+    # -- flight: descent from the apex, leg at the touchdown angle -------------------------------
+    xf, (x, z, x_dot, z_dot) = sym.states("x", "z", "x_dot", "z_dot")
+    ballistic = sym.function("flow", xf, ca.vertcat(x_dot, z_dot, 0, -g))
+    theta_td = angle_law(z_dot)
+    dx, dz = -l0 * ca.sin(theta_td), z - h  # hip relative to the foot at touchdown
+    touchdown = Transition(
+        name="touchdown",
+        guard=sym.function("guard", xf, z - h - l0 * ca.cos(theta_td)),  # z − h − l0 cos θ_td
+        direction=-1,
+        # Polar coordinates of the hip about the foot x + l0 sin θ_td (on the ground).
+        reset=sym.function(
+            "reset",
+            xf,
+            ca.vertcat(
+                ca.sqrt(dx**2 + dz**2),
+                ca.atan2(dx, dz),
+                (dx * x_dot + dz * z_dot) / ca.sqrt(dx**2 + dz**2),
+                (dz * x_dot - dx * z_dot) / (dx**2 + dz**2),
+            ),
+        ),
+        target=1,
+        foothold="foot",
+        doc="foot reaches the ground: z − h − l0·cos θ_td = 0, falling; the hip in polar "
+        "coordinates about the foot",
+    )
+    no_touchdown = Transition(
+        name="apex below touchdown height (hip reaches the ground)",
+        guard=sym.function("guard", xf, z - h),
+        direction=-1,
+        reset=None,
+        target=None,
+        doc="fires only if touchdown never armed: the apex was below h + l0·cos θ_td",
+    )
+    flight_energy = sym.conserved("energy", xf, 0.5 * m * (x_dot**2 + z_dot**2) + m * g * z)
+    descent_points = ca.Function(
+        "points",
+        [xf, sym.p],
+        [
+            ca.horzcat(
+                ca.vertcat(x, z),
+                ca.vertcat(x + l0 * ca.sin(drawn_angle), z - l0 * ca.cos(drawn_angle)),
+                ca.vertcat(x, 0),
+            )
+        ],
+    )
+    descent = Phase(
+        "descent",
+        ("x", "z", "x_dot", "z_dot"),
+        ballistic,
+        (touchdown, no_touchdown),
+        {"energy": flight_energy},
+        points=descent_points,
+        point_names=("hip", "foot", "origin"),
+    )
+
+    # -- stance: polar coordinates about the foot ------------------------------------------------
+    xs, (r, th, r_dot, th_dot) = sym.states("r", "theta", "r_dot", "theta_dot")
+    stance_flow = sym.function(
+        "flow",
+        xs,
+        ca.vertcat(
+            r_dot,
+            th_dot,
+            r * th_dot**2 - g * ca.cos(th) + k / m * (l0 - r),
+            (g * ca.sin(th) - 2 * r_dot * th_dot) / r,
+        ),
+    )
+    hip_x, hip_z = r * ca.sin(th), h + r * ca.cos(th)
+    hip_xd = r_dot * ca.sin(th) + r * th_dot * ca.cos(th)
+    hip_zd = r_dot * ca.cos(th) - r * th_dot * ca.sin(th)
+    to_flight = ca.vertcat(hip_x, hip_z, hip_xd, hip_zd)
+    liftoff = Transition(
+        name="liftoff",
+        guard=sym.function("guard", xs, r - l0),  # r = l0, extending
+        direction=+1,
+        reset=sym.function("reset", xs, to_flight),
+        target=2,
+        admissible=sym.function("admissible", xs, hip_xd),  # moving forwards
+        impact=False,
+        doc="the spring regains its rest length, r = l0, extending, moving forwards; Cartesian "
+        "flight state with x from the foot",
+    )
+    backwards = Transition(
+        name="falls back (lifts off moving backwards)",
+        guard=sym.function("guard", xs, r - l0),
+        direction=+1,
+        reset=None,
+        target=None,
+        admissible=sym.function("admissible", xs, -hip_xd),
+        doc="liftoff with the hip moving backwards: too little forward energy",
+    )
+    stops = Transition(
+        name="falls back (stance leg stops rotating)",
+        guard=sym.function("guard", xs, th_dot),
+        direction=-1,
+        reset=None,
+        target=None,
+        doc="θ̇ falls through 0 in stance: too little forward energy to vault over the foot",
+    )
+    collapses = Transition(
+        name="falls (hip reaches the ground in stance)",
+        guard=sym.function("guard", xs, r * ca.cos(th)),
+        direction=-1,
+        reset=None,
+        target=None,
+        doc="the hip reaches the foot's level",
+    )
+    stance_energy = sym.conserved(
+        "energy",
+        xs,
+        0.5 * m * (r_dot**2 + r**2 * th_dot**2) + m * g * hip_z + 0.5 * k * (l0 - r) ** 2,
+    )
+    stance_points = ca.Function(
+        "points",
+        [xs, sym.p],
+        [ca.horzcat(ca.vertcat(hip_x, r * ca.cos(th)), ca.DM.zeros(2, 1))],
+    )
+    stance = Phase(
+        "stance",
+        ("r", "theta", "r_dot", "theta_dot"),
+        stance_flow,
+        (liftoff, backwards, stops, collapses),
+        {"energy": stance_energy},
+        points=stance_points,
+        point_names=("hip", "foot"),
+    )
+
+    # -- flight: ascent to the apex ------------------------------------------------------------
+    apex = Transition(
+        name="apex",
+        guard=sym.function("guard", xf, z_dot),  # ż = 0, falling
+        direction=-1,
+        reset=sym.function("reset", xf, ca.vertcat(0, z, x_dot, z_dot)),  # x from the apex
+        target=0,
+        impact=False,
+        foothold="below_hip",
+        doc="top of the flight, ż = 0 falling; x is measured from here on",
+    )
+    no_apex = Transition(
+        name="falls (no apex after liftoff)",
+        guard=sym.function("guard", xf, z - h),
+        direction=-1,
+        reset=None,
+        target=None,
+        doc="lifted off falling: the hip reaches the ground before any apex",
+    )
+    ascent_points = ca.Function(
+        "points",
+        [xf, sym.p],
+        [
+            ca.horzcat(
+                ca.vertcat(x, z - h),
+                ca.vertcat(x + l0 * ca.sin(drawn_angle), z - h - l0 * ca.cos(drawn_angle)),
+                ca.vertcat(x, -h),
+            )
+        ],
+    )
+    ascent = Phase(
+        "ascent",
+        ("x", "z", "x_dot", "z_dot"),
+        ballistic,
+        (apex, no_apex),
+        {"energy": flight_energy},
+        points=ascent_points,
+        point_names=("hip", "foot", "below_hip"),
+    )
+
+    # -- the apex section: z free, x = 0, ż = 0, ẋ from the energy -----------------------------
+    s = ca.SX.sym("s", 1)
+    speed = ca.sqrt(ca.fmax(2 * (E / m - g * s[0]), 0))
+    section = Section(
+        ("z",),
+        sym.lift(s, ca.vertcat(0, s[0], speed, 0)),
+        "apex: z_dot = 0, x = 0, x_dot = sqrt(2 (energy/mass − gravity·z))",
+    )
+    del cls
+    return (descent, stance, ascent), section
+
+
+@dataclass(frozen=True)
+class Slip(HybridModel):
+    """SLIP runner: apex state ``x, z`` (m), ``x_dot, z_dot`` (m/s); stance ``r`` (m), ``theta``
+    (rad), ``r_dot``, ``theta_dot``; per-step input ``touchdown_angle`` (rad from vertical)."""
+
+    name = "slip"
+    title = "Spring-loaded inverted pendulum (SLIP)"
+    reference = "Blickhan 1989; Geyer et al. 2005; Tedrake, Underactuated Robotics"
+    inputs = ("touchdown_angle",)
+    input_units = ("rad",)
+    mesh = (4, 4)
+    #: A flight from an apex lasts at most sqrt(2 E/(m g²)) ≈ 0.6 s at the defaults.
+    max_phase_time: ClassVar[float] = 5.0
+    #: Range of the per-step input (``low``, ``high``): the foot ahead of the hip, the leg above
+    #: the ground (step-to-step controllers keep to it).
+    input_bounds: ClassVar[tuple[tuple[float, ...], tuple[float, ...]]] = ((0.0,), (math.pi / 2,))
+
+    mass: float = parameter(
+        _M, unit="kg", doc="body mass m", source=_TEDRAKE, low=0.0, high=1e4, low_open=True
+    )
+    rest_length: float = parameter(
+        _L0, unit="m", doc="leg rest length l0", source=_TEDRAKE, low=0.0, high=10.0, low_open=True
+    )
+    stiffness: float = parameter(
+        8397.36,
+        unit="N/m",
+        doc="leg stiffness k (k̃ = k l0/(m g) = 10.7 at the defaults)",
+        source=_TEDRAKE + ": k̃ = 10.7",
+        low=0.0,
+        high=1e7,
+        low_open=True,
+    )
+    touchdown_angle: float = parameter(
+        math.pi / 6,
+        unit="rad",
+        doc="nominal touchdown angle θ_td from vertical (the per-step input's default)",
+        source=_TEDRAKE + ": 30°",
+        low=0.0,
+        high=math.pi / 2,
+        high_open=True,
+    )
+    gravity: float = parameter(
+        _G,
+        unit="m/s^2",
+        doc="gravitational acceleration g",
+        source="standard gravity",
+        low=0.0,
+        high=100.0,
+        low_open=True,
+    )
+    energy: float = parameter(
+        1263.528,
+        unit="J",
+        doc="total energy E = ½ m v² + m g z (Ẽ = E/(m g l0) = 1.61 at the defaults)",
+        source=_TEDRAKE + ": Ẽ = 1.61",
+        low=0.0,
+        high=1e8,
+        low_open=True,
+    )
+    ground_height: float = parameter(
+        0.0,
+        unit="m",
+        doc="height h of the ground under the next touchdown (rough terrain: changes per step)",
+        source="level ground",
+        low=-10.0,
+        high=10.0,
+    )
+
+    @classmethod
+    def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
+        return _build(cls, sym, lambda z_dot: sym.u[0])
+
+    def check(self) -> None:
+        top = self.energy / (self.mass * self.gravity)
+        if top <= self.ground_height + self.rest_length * math.cos(self.touchdown_angle):
+            raise ParameterError(
+                f"slip: `energy` = {self.energy:g} J puts the highest apex, E/(m g) = {top:.4g} m, "
+                f"below the touchdown height h + l0·cos θ_td = "
+                f"{self.ground_height + self.rest_length * math.cos(self.touchdown_angle):.4g} m: "
+                f"the runner cannot run; raise `energy` (Ẽ = E/(m g l0) > cos θ_td) or lower "
+                f"`touchdown_angle`'s cosine"
+            )
+
+    # -- dimensionless numbers and the map's domain ----------------------------------------------
+    @property
+    def relative_stiffness(self) -> float:
+        """``k̃ = k l0 / (m g)`` (Geyer's dimensionless stiffness)."""
+        return self.stiffness * self.rest_length / (self.mass * self.gravity)
+
+    @property
+    def relative_energy(self) -> float:
+        """``Ẽ = E / (m g l0)`` (Geyer's dimensionless energy)."""
+        return self.energy / (self.mass * self.gravity * self.rest_length)
+
+    def touchdown_height(self, angle: float | None = None) -> float:
+        """``h + l0 cos θ_td`` (m): the lowest apex from which the leg can be placed."""
+        angle = self.touchdown_angle if angle is None else angle
+        return self.ground_height + self.rest_length * math.cos(angle)
+
+    def highest_apex(self) -> float:
+        """``E/(m g)`` (m): the apex height with no forward speed left."""
+        return self.energy / (self.mass * self.gravity)
+
+    def apex_domain(self) -> tuple[float, float]:
+        """``(touchdown height, E/(m g))``: the apex heights where the map may be defined (it is
+        NaN outside; near the top the runner falls back)."""
+        return self.touchdown_height(), self.highest_apex()
+
+    def apex_speed(self, z: float) -> float:
+        """Forward speed ``ẋ = sqrt(2 (E/m − g z))`` (m/s) at an apex of height ``z``."""
+        return math.sqrt(max(2 * (self.energy / self.mass - self.gravity * z), 0.0))
+
+    def existence_note(self) -> str | None:
+        """The map's domain and Geyer's dimensionless numbers (added to a failed search)."""
+        lo, hi = self.apex_domain()
+        return (
+            f"SLIP with k̃ = {self.relative_stiffness:.4g}, Ẽ = {self.relative_energy:.4g}: the "
+            f"apex map is defined only for apex heights between the touchdown height "
+            f"{lo:.4g} m and E/(m g) = {hi:.4g} m, and near the top the runner falls back "
+            f"(Tedrake, Underactuated Robotics, SLIP apex map)"
+        )
+
+    def nominal_input(self) -> np.ndarray:
+        """The touchdown angle parameter (rad)."""
+        return np.array([self.touchdown_angle])
+
+    def default_start(self) -> dict[str, float]:
+        """Near the stable fixed point of Tedrake's apex map (z ≈ 0.87 m at the defaults)."""
+        lo, hi = self.apex_domain()
+        return {"z": 0.87} if lo < 0.87 < hi else {"z": 0.5 * (lo + hi)}
+
+
+@dataclass(frozen=True)
+class SlipSwingLeg(Slip):
+    """SLIP whose leg angle in descent follows a law of the time since apex ``t = −ż/g``:
+    ``θ(t) = Σ_j c_j T_j(ξ)``, ``ξ = (t − t_c)/t_w`` clipped to [−1, 1] (Chebyshev polynomials
+    ``T_j``, degree :data:`SWING_LAW_DEGREE`), the per-step inputs ``t_center, t_halfwidth,
+    c0 … c8``.
+
+    Touchdown happens wherever the foot meets the ground, at whatever (unknown) height: the leg
+    angle then is ``θ(t_touchdown)``.  Ernst, Geyer & Blickhan 2009 and Tedrake's "blind running"
+    choose the law so that this angle is the deadbeat one for every ground height
+    (:func:`gaitopt.terrain.blind_swing_law`).  With only ``c0`` nonzero it is :class:`Slip`.
+    """
+
+    name = "slip_swing_leg"
+    title = "SLIP with a swing-leg law (blind running)"
+    inputs = ("t_center", "t_halfwidth") + tuple(f"c{j}" for j in range(SWING_LAW_DEGREE + 1))
+    input_units = ("s", "s") + ("rad",) * (SWING_LAW_DEGREE + 1)
+    input_bounds = None
+
+    @classmethod
+    def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
+        def law(z_dot):
+            t = -z_dot / sym.gravity  # time since apex (ballistic descent from ż = 0)
+            # Held at its end values outside the fitted window [t_c − t_w, t_c + t_w].
+            xi = ca.fmax(-1, ca.fmin(1, (t - sym.u[0]) / sym.u[1]))
+            # Chebyshev recurrence T_{j+1} = 2 ξ T_j − T_{j−1}.
+            t_prev, t_cur = ca.SX(1), xi
+            angle = sym.u[2] + sym.u[3] * xi
+            for j in range(2, SWING_LAW_DEGREE + 1):
+                t_prev, t_cur = t_cur, 2 * xi * t_cur - t_prev
+                angle = angle + sym.u[2 + j] * t_cur
+            return angle
+
+        return _build(cls, sym, law)
+
+    def nominal_input(self) -> np.ndarray:
+        """The constant law ``θ(t) = touchdown_angle``."""
+        u = np.zeros(len(self.inputs))
+        u[0], u[1], u[2] = 0.2, 0.1, self.touchdown_angle
+        return u
