@@ -10,6 +10,8 @@
                            [--json]
     gaitopt control MODEL --kind lqr|acker|deadbeat [--set ...] [--guess ...] [--target ...]
                           [--q Q] [--r R] [--poles P] [--from STATE=VALUE ...] [--json]
+    gaitopt continue MODEL --param NAME --to VALUE [--set ...] [--guess ...] [--steps K]
+                           [--both] [--no-cascade] [--max-period K] [--out DIR] [--json]
 
 Exit status (DESIGN.md, public contract): 0 gait found / simulation completed; 1 no gait found
 (the JSON is still printed, with ``success: false``) or the simulation did not complete; 2 bad
@@ -35,10 +37,12 @@ import os
 import sys
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
 
+from .continuation import Branch, continuation
 from .errors import GaitoptInputError, GuessError, ParameterError, StateError, did_you_mean
 from .files import jsonable
 from .hybrid import HybridModel
@@ -753,6 +757,125 @@ def _print_control(report: Mapping[str, Any]) -> None:
         print(f"next         {report['next']}")
 
 
+# -- gaitopt continue ----------------------------------------------------------------------------
+def _continue_arguments(parser: argparse.ArgumentParser) -> None:
+    _model_arguments(parser)
+    parser.add_argument("--param", required=True, metavar="NAME", help="parameter to vary")
+    parser.add_argument(
+        "--to", required=True, metavar="VALUE", help="parameter value to continue to"
+    )
+    parser.add_argument(
+        "--guess",
+        action="append",
+        metavar="STATE=VALUE",
+        help="guess of the starting gait's section coordinates (repeatable)",
+    )
+    parser.add_argument(
+        "--steps",
+        type=_count(1),
+        default=1,
+        metavar="K",
+        help="period of the starting gait in steps (default 1)",
+    )
+    parser.add_argument(
+        "--both", action="store_true", help="also continue away from --to, to the range's end"
+    )
+    parser.add_argument(
+        "--no-cascade",
+        action="store_true",
+        help="do not switch to the period-2k branches at period doublings",
+    )
+    parser.add_argument(
+        "--max-period",
+        type=_count(1),
+        default=8,
+        metavar="K",
+        help="deepest period of the period-doubling cascade (default 8)",
+    )
+    parser.add_argument(
+        "--out",
+        metavar="DIR",
+        help="write branch.json, branch.csv and branch.png to DIR",
+    )
+
+
+def run_continue(args: argparse.Namespace) -> int:
+    """``gaitopt continue``: follow a gait through a parameter; special points; cascades."""
+    model = build_model(args.model, args.set)
+    specs = {s.name: s for s in model.parameter_specs()}
+    if args.param not in specs:
+        raise InputError(
+            f"--param {args.param}: {model.name} has no parameter {args.param!r}; "
+            f"{did_you_mean(args.param, specs)}parameters: {', '.join(specs)}"
+        )
+    to = _number("--to", args.to, args.to, f"{specs[args.param].default:g}")
+    try:
+        check_parameter(model.name, specs[args.param], to)
+    except ParameterError as exc:
+        raise InputError(f"--to {args.to}: {exc}") from None
+    guess = parse_guess(model, args.guess)
+    try:
+        with _solver_output_to_stderr():
+            branch = continuation(
+                model,
+                args.param,
+                to=to,
+                start=guess,
+                steps=args.steps,
+                both_directions=args.both,
+                cascade=not args.no_cascade,
+                max_period=args.max_period,
+            )
+    except GuessError as exc:
+        raise InputError(f"{_echo('--guess', args.guess or ()) or '--guess'}: {exc}") from None
+    except ParameterError as exc:
+        raise InputError(f"--param {args.param} --to {args.to}: {exc}") from None
+    if args.out:
+        _write_branch(branch, Path(args.out))
+    if args.json:
+        _print_json(branch.as_dict())
+    else:
+        _print_branch(branch)
+    return EXIT_OK if branch.success else EXIT_NOT_FOUND
+
+
+def _write_branch(branch: Branch, folder: Path) -> None:
+    from .files import write_csv, write_json
+    from .plotting import plot_branch, save_figure
+
+    folder.mkdir(parents=True, exist_ok=True)
+    write_json(branch.as_dict(), folder / "branch.json")
+    if branch.cycles:
+        write_csv(*branch.csv_rows(), folder / "branch.csv")
+        fig, _ = plot_branch(branch)
+        save_figure(fig, folder / "branch.png")
+
+
+def _print_branch(branch: Branch) -> None:
+    model = branch.model
+    _print_rows(
+        [
+            ("model", f"{model.name} ({model.title})"),
+            ("params", _format_params(model.params)),
+            ("success", branch.success),
+            ("message", branch.message),
+        ]
+    )
+    for sub in branch.descendants():
+        if not sub.cycles:
+            continue
+        lam = sub.params
+        print(
+            f"period-{sub.steps} branch: {len(sub.cycles)} gaits, {branch.param} from "
+            f"{lam.min():.8g} to {lam.max():.8g}; {sub.message}"
+        )
+        for sp in sub.special_points:
+            mults = ", ".join(f"{abs(z):.6f}" for z in sp.cycle.multipliers) if sp.cycle else ""
+            print(
+                f"    {sp.kind:<9}{branch.param} = {sp.param:.10f}   |λ| = [{mults}]   {sp.message}"
+            )
+
+
 # -- the command ---------------------------------------------------------------------------------
 SUBCOMMANDS: dict[str, Subcommand] = {
     "list": Subcommand("list the models and their parameters", _list_arguments, run_list),
@@ -766,6 +889,11 @@ SUBCOMMANDS: dict[str, Subcommand] = {
         "design a step-to-step controller (LQR, pole placement, deadbeat) around a gait",
         _control_arguments,
         run_control,
+    ),
+    "continue": Subcommand(
+        "follow a gait through a parameter: special points, period-doubling cascades",
+        _continue_arguments,
+        run_continue,
     ),
 }
 

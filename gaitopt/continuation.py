@@ -671,6 +671,12 @@ class _Follower:
         if last is not self.cycles[-1]:
             self.cycles.append(last)
         lam = float(getattr(last.model, self.param))
+        growth = last.period / self.first.period
+        if growth > 3:
+            reason = (
+                f"its period grows without bound ({last.period:.4g} s here, {self.first.period:.4g}"
+                f" s at the start): the orbit comes ever closer to an unstable equilibrium; {reason}"
+            )
         message = f"the gait stops existing: {reason}" if reason else "the gait stops existing"
         self.special_points.append(
             SpecialPoint("boundary", lam, len(self.cycles) - 1, last, message)

@@ -201,6 +201,10 @@ BAD_INPUT = [
     (["solve", "compass_gait", "--steps", "0"], ["--steps", "'0'"]),
     (["solve", "compass_gait", "--method", "newtn"], ["--method", "'newtn'"]),
     (["frobnicate"], ["'frobnicate'"]),
+    (["continue", "compass_gait", "--param", "slop", "--to", "0.06"], ["--param slop", "'slope'"]),
+    (["continue", "compass_gait", "--param", "slope", "--to", "9"], ["--to 9", "out of range"]),
+    (["continue", "compass_gait", "--param", "slope", "--to", "x"], ["--to x", "not a number"]),
+    (["continue", "compass_gait", "--param", "slope"], ["--to"]),
 ]
 
 
@@ -305,3 +309,49 @@ BAD_CONTROL_INPUT = [
 @pytest.mark.parametrize(("argv", "expected"), BAD_CONTROL_INPUT, ids=lambda v: " ".join(v))
 def test_bad_control_input_is_one_line_and_exit_2(capsys, argv, expected):
     test_bad_input_is_one_line_and_exit_2(capsys, argv, expected)
+
+
+# -- continue ------------------------------------------------------------------------------------
+def test_continue_json_contract_and_period_doubling(capsys, tmp_path):
+    # DESIGN.md's contract: `continue --json` prints model, param, points (param, period,
+    # fixed_point, multipliers, stable) and special_points (kind, param).  The compass gait's
+    # first period doubling lies at slope 0.0766356 (located by continuation to 1e-10 and checked
+    # against a bisection on the multiplier in tests/test_continuation.py): tolerance 1e-7.
+    status, data = run_json(
+        capsys,
+        "continue",
+        "compass_gait",
+        "--param",
+        "slope",
+        "--to",
+        "0.08",
+        "--max-period",
+        "2",
+        "--json",
+        "--out",
+        str(tmp_path),
+    )
+    assert status == 0
+    assert {"model", "param", "points", "special_points"} <= set(data)
+    assert data["model"] == "compass_gait" and data["param"] == "slope"
+    for point in data["points"]:
+        assert {"param", "period", "fixed_point", "multipliers", "stable"} <= set(point)
+        assert all(len(z) == 2 for z in point["multipliers"])
+    kinds = [sp["kind"] for sp in data["special_points"]]
+    assert kinds == ["PD"]
+    assert data["special_points"][0]["param"] == pytest.approx(0.0766356, abs=1e-7)
+    assert data["branches"][0]["steps"] == 2  # the period-2 branch after switching
+    for name in ("branch.json", "branch.csv", "branch.png"):
+        assert (tmp_path / name).stat().st_size > 0
+    assert json.loads((tmp_path / "branch.json").read_text())["param"] == "slope"
+
+
+def test_continue_reports_a_boundary(capsys):
+    # The rimless wheel's rolling gait stops existing at slope 0.06822945 (closed form ω* = ω₁,
+    # Tedrake): a `boundary` special point (its precision is tested in test_continuation.py).
+    status, data = run_json(
+        capsys, "continue", "rimless_wheel", "--param", "slope", "--to", "0.05", "--json"
+    )
+    assert status == 0
+    assert [sp["kind"] for sp in data["special_points"]] == ["boundary"]
+    assert data["special_points"][0]["param"] == pytest.approx(0.06822945, abs=1e-7)
