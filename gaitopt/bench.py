@@ -65,6 +65,7 @@ from typing import Any
 import numpy as np
 
 from . import _bench_baselines as baselines
+from . import _bench_branches
 from .files import write_json
 
 __all__ = ["main", "run"]
@@ -406,6 +407,8 @@ def run(
     converge: bool = True,
     control: bool = True,
     decisions: int = 200,
+    branches: bool = True,
+    quick: bool = False,
     log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True),
 ) -> dict[str, Any]:
     """Measure everything; the JSON-ready record (see the module docstring)."""
@@ -465,6 +468,12 @@ def run(
             record["control"] = _deadbeat_bench(decisions)
         except Exception as err:  # e.g. no C compiler: report, never sink the benchmark
             record["control"] = {"skipped": f"{type(err).__name__}: {err}"}
+    if branches:
+        log("[bench] continuation and sweeps: branch rate, slope study vs orbit diagram, workers")
+        try:
+            record["branches"] = _bench_branches.run(quick=quick)
+        except Exception as err:  # report, never sink the benchmark
+            record["branches"] = {"skipped": f"{type(err).__name__}: {err}"}
     record["elapsed_s"] = time.perf_counter() - started
     return record
 
@@ -887,6 +896,9 @@ def format_table(record: dict[str, Any]) -> str:
             )
     if "control" in record:
         lines += _control_lines(record["control"])
+    if "branches" in record:
+        b = record["branches"]
+        lines += ["", _bench_branches.table(b) if "skipped" not in b else f"branches: {b}"]
     lines.append(f"Total benchmark time: {record['elapsed_s']:.0f} s.")
     return "\n".join(lines)
 
@@ -931,6 +943,9 @@ def main(argv: list[str] | None = None) -> int:
         help="apex heights the deadbeat decision is timed from (default 200)",
     )
     parser.add_argument(
+        "--no-branches", action="store_true", help="skip the continuation and sweep timings"
+    )
+    parser.add_argument(
         "--quick",
         action="store_true",
         help="2 repeats, 5 calls once built, no Drake convergence runs",
@@ -955,6 +970,8 @@ def main(argv: list[str] | None = None) -> int:
         converge=not args.quick,
         control=not args.no_control,
         decisions=max(20, args.decisions // (4 if args.quick else 1)),
+        branches=not args.no_branches,
+        quick=args.quick,
     )
     record["table"] = rows(record)
     args.out.parent.mkdir(parents=True, exist_ok=True)
