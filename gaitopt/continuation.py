@@ -398,7 +398,21 @@ class _Follower:
         self.model0 = model
         self.index = [s.name for s in model.parameter_specs()].index(param)
         self.scale = max(abs(float(getattr(model, param))), 1e-3)
-        self.u = first.inputs
+        # A model whose nominal per-step input is a parameter (the SLIP's touchdown angle) moves
+        # its input with that parameter, unless the start used other inputs on purpose.
+        nominal = model.nominal_input()
+        self.u0 = np.asarray(first.inputs, dtype=float)
+        self.du = np.zeros_like(self.u0)
+        if self.u0.size and np.allclose(self.u0, nominal, rtol=0, atol=1e-15):
+            h = 1e-6 * self.scale
+            lam0 = float(getattr(model, param))
+            try:
+                up = model.replace(**{param: lam0 + h}).nominal_input()
+                self.du = (up - nominal) / h  # nominal inputs are affine in the parameter
+            except ParameterError:
+                down = model.replace(**{param: lam0 - h}).nominal_input()
+                self.du = (nominal - down) / h
+        self.lam0 = float(getattr(model, param))
         disc = first.discretisation or MultipleShooting(*type(model).mesh)
         self.tr: Transcription = transcription(type(model), disc, first.steps)
         self.refinements = 0
@@ -415,11 +429,15 @@ class _Follower:
         p[self.index] = self.lam(y)
         return p
 
+    def _u(self, y: np.ndarray) -> np.ndarray:
+        return self.u0 + self.du * (self.lam(y) - self.lam0)
+
     def jacobian(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``F(y)`` and ``[F_w, F_ℓ]``."""
-        F, F_w, F_p, _ = self.tr.residual_jacobians(y[:-1], self.u, self._p(y))
+        """``F(y)`` and ``[F_w, F_ℓ]`` (``F_ℓ`` through the parameter and the input it sets)."""
+        F, F_w, F_p, F_u = self.tr.residual_jacobians(y[:-1], self._u(y), self._p(y))
         F = np.asarray(F, dtype=float).ravel()
-        J = np.hstack([np.asarray(F_w), np.asarray(F_p)[:, [self.index]] * self.scale])
+        F_lam = np.asarray(F_p)[:, self.index] + np.asarray(F_u) @ self.du
+        J = np.hstack([np.asarray(F_w), F_lam[:, None] * self.scale])
         return F, J
 
     def weights(self, y: np.ndarray) -> np.ndarray:
@@ -464,7 +482,7 @@ class _Follower:
 
     def multipliers_at(self, y: np.ndarray) -> np.ndarray:
         """Multipliers only (no checks): for locating special points."""
-        J_w, J_u, _, _ = self.tr.linearisation(y[:-1], self.u, self._p(y))
+        J_w, J_u, _, _ = self.tr.linearisation(y[:-1], self._u(y), self._p(y))
         A, _ = section_jacobians(np.asarray(J_w), np.asarray(J_u), self.tr.m, self.tr.n_g)
         return np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
 
@@ -500,7 +518,7 @@ class _Follower:
             model,
             self.tr,
             y[:-1],
-            self.u,
+            self._u(y),
             verify=self.verify,
             tol=self.tol,
             discretisation_error=error,
@@ -514,8 +532,9 @@ class _Follower:
     def _discretisation_error(self, y: np.ndarray) -> float:
         fine = transcription(type(self.model0), _doubled(self.tr.disc), self.tr.cycles)
         p = self._p(y)
-        F_fine = np.asarray(fine.residual(y[:-1], self.u, p), dtype=float).ravel()
-        _, F_w, _, _ = self.tr.residual_jacobians(y[:-1], self.u, p)
+        u = self._u(y)
+        F_fine = np.asarray(fine.residual(y[:-1], u, p), dtype=float).ravel()
+        _, F_w, _, _ = self.tr.residual_jacobians(y[:-1], u, p)
         return float(np.max(np.abs(np.linalg.solve(np.asarray(F_w), F_fine))))
 
     # -- the loop ----------------------------------------------------------------------------
@@ -638,7 +657,9 @@ class _Follower:
         model = self.model_at(y_mid)
         if model is None:
             return None
-        cycle = certify(model, self.tr, y_mid[:-1], self.u, verify=self.verify, tol=self.tol)
+        cycle = certify(
+            model, self.tr, y_mid[:-1], self._u(y_mid), verify=self.verify, tol=self.tol
+        )
         multipliers = cycle.multipliers if cycle.success else self.multipliers_at(y_mid)
         if kind == "NS" and not _has_complex_pair_on_unit_circle(multipliers):
             return None  # a neutral saddle (real μ_i μ_j = 1), not a Neimark–Sacker point
@@ -674,8 +695,9 @@ class _Follower:
         growth = last.period / self.first.period
         if growth > 3:
             reason = (
-                f"its period grows without bound ({last.period:.4g} s here, {self.first.period:.4g}"
-                f" s at the start): the orbit comes ever closer to an unstable equilibrium; {reason}"
+                f"its period grows without bound ({last.period:.4g} s here, "
+                f"{self.first.period:.4g} s at the start): the orbit comes ever closer to an "
+                f"unstable equilibrium; {reason}"
             )
         message = f"the gait stops existing: {reason}" if reason else "the gait stops existing"
         self.special_points.append(
