@@ -263,6 +263,7 @@ def continuation(
     steps: int = 1,
     options: PseudoArclength = PseudoArclength(),
     both_directions: bool = False,
+    bounds: tuple[float, float] | None = None,
     cascade: bool = True,
     max_period: int = 16,
     verify: bool = True,
@@ -289,6 +290,9 @@ def continuation(
     both_directions : bool
         Also follow the branch from the start away from ``to`` (until the parameter's range ends
         or the gait stops existing).
+    bounds : (float, float), optional
+        Parameter interval the branch stays in (both directions, also after folds); default the
+        parameter's valid range.
     cascade : bool
         At each period doubling switch to the period-2k branch and follow it too (in the
         continuation direction), down the cascade until ``max_period``.
@@ -342,8 +346,23 @@ def continuation(
         branch.message = f"no gait to start from: {first.message}"
         return branch
     direction = 1.0 if to is None or to > lam0 else -1.0
+    lo, hi = (-math.inf, math.inf) if bounds is None else (float(bounds[0]), float(bounds[1]))
+    if not lo <= lam0 <= hi:
+        raise ParameterError(
+            f"`bounds` = ({lo:g}, {hi:g}) must contain the start value {param} = {lam0:g}"
+        )
     return _follow_branch(
-        first, param, direction, to, options, both_directions, cascade, max_period, verify, tol
+        first,
+        param,
+        direction,
+        to,
+        (lo, hi),
+        options,
+        both_directions,
+        cascade,
+        max_period,
+        verify,
+        tol,
     )
 
 
@@ -352,6 +371,7 @@ def _follow_branch(
     param,
     direction,
     to,
+    bounds,
     options,
     both_directions,
     cascade,
@@ -361,10 +381,13 @@ def _follow_branch(
 ) -> Branch:
     """Follow a certified gait in ``direction`` (and back, if asked); switch at PDs."""
     branch = Branch(first.model, param, first.steps)
-    forward = _Follower(first, param, direction, to, options, verify, tol).run()
+    lo, hi = bounds
+    if to is not None:
+        lo, hi = (lo, min(hi, to)) if direction > 0 else (max(lo, to), hi)
+    forward = _Follower(first, param, direction, (lo, hi), options, verify, tol).run()
     points, specials, message = forward.cycles, forward.special_points, forward.stop
     if both_directions:
-        backward = _Follower(first, param, -direction, None, options, verify, tol).run()
+        backward = _Follower(first, param, -direction, bounds, options, verify, tol).run()
         n_back = len(backward.cycles) - 1  # the start is shared
         points = backward.cycles[::-1] + points[1:]
         specials = [_reindex(sp, n_back - sp.index - 1) for sp in backward.special_points[::-1]] + [
@@ -376,7 +399,7 @@ def _follow_branch(
         for sp in branch.special_points:
             if sp.kind == "PD" and 2 * branch.steps <= max_period:
                 child = _switch_at_period_doubling(
-                    sp, param, direction, to, options, verify, tol, max_period
+                    sp, param, direction, to, bounds, options, verify, tol, max_period
                 )
                 if child is not None:
                     branch.children.append(child)
@@ -391,9 +414,9 @@ def _reindex(sp: SpecialPoint, index: int) -> SpecialPoint:
 class _Follower:
     """One direction of pseudo-arclength continuation from a certified gait."""
 
-    def __init__(self, first, param, direction, target, options, verify, tol):
+    def __init__(self, first, param, direction, limits, options, verify, tol):
         self.first, self.param, self.direction = first, param, direction
-        self.target, self.options, self.verify, self.tol = target, options, verify, tol
+        self.limits, self.options, self.verify, self.tol = limits, options, verify, tol
         model = first.model
         self.model0 = model
         self.index = [s.name for s in model.parameter_specs()].index(param)
@@ -553,8 +576,9 @@ class _Follower:
         while len(self.cycles) < opts.max_points:
             y_new, ok, iterations = self.correct(y + h * t, t)
             lam_new = self.lam(y_new)
-            if ok and self._beyond_target(lam_new):
-                y_new, ok = self._land_on_target(y, t)
+            limit = self._crossed_limit(lam_new) if ok else None
+            if limit is not None:
+                y_new, ok = self._land_on(limit, y, t)
                 lam_new = self.lam(y_new)
                 if ok:
                     cycle = self.certified(y_new)
@@ -598,14 +622,15 @@ class _Follower:
         self.stop = f"stopped after {opts.max_points} points"
         return self
 
-    def _beyond_target(self, lam: float) -> bool:
-        return self.target is not None and (lam - self.target) * self.direction > 0
+    def _crossed_limit(self, lam: float) -> float | None:
+        lo, hi = self.limits
+        return hi if lam > hi else lo if lam < lo else None
 
-    def _land_on_target(self, y: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, bool]:
-        """Correct at exactly the target parameter (natural parameter step from ``y``)."""
-        dl = self.target / self.scale - y[-1]
+    def _land_on(self, limit: float, y: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, bool]:
+        """Correct at exactly the limit (natural parameter step from ``y``)."""
+        dl = limit / self.scale - y[-1]
         y_pred = y + t * (dl / t[-1]) if abs(t[-1]) > 1e-12 else y.copy()
-        y_pred[-1] = self.target / self.scale
+        y_pred[-1] = limit / self.scale
         y_new, ok, _ = self.correct(y_pred, self._unit_lambda())
         return y_new, ok
 
@@ -628,7 +653,7 @@ class _Follower:
 
     def _locate(self, y, t, h_b, kind, psi_a, psi_b) -> SpecialPoint | None:
         """Illinois regula falsi on the arclength for the test function's zero, until the
-        bracket is below 1e-10 in the parameter."""
+        bracket is below 1e-10 in the parameter and 1e-9 in the arclength."""
         lo, hi, f_lo, f_hi = 0.0, h_b, psi_a, psi_b
         lam_lo, lam_hi = self.lam(y), None
         side, y_mid = 0, y
@@ -652,7 +677,9 @@ class _Follower:
                 if side == 1:
                     f_lo /= 2
                 side = 1
-            if lam_hi is not None and abs(lam_hi - lam_lo) < _LOCATE_TOL:
+            # Both brackets: near a fold λ is quadratic in the arclength, so a tight λ alone
+            # would leave the point (and its multiplier +1) loose.
+            if lam_hi is not None and abs(lam_hi - lam_lo) < _LOCATE_TOL and hi - lo < 1e-9:
                 break
         model = self.model_at(y_mid)
         if model is None:
@@ -742,7 +769,7 @@ def _has_complex_pair_on_unit_circle(multipliers: np.ndarray) -> bool:
 
 # ---------------------------------------------------------------------------------------------
 def _switch_at_period_doubling(
-    sp: SpecialPoint, param, direction, to, options, verify, tol, max_period
+    sp: SpecialPoint, param, direction, to, bounds, options, verify, tol, max_period
 ) -> Branch | None:
     """Find the period-2k orbit born at a PD and follow it away from the PD (and its own
     doublings).  It is sought first on the continuation's side of the PD (a supercritical
@@ -764,6 +791,8 @@ def _switch_at_period_doubling(
             lam = lam_pd + side * offset * max(abs(lam_pd), 1e-3)
             if to is not None and side == direction and (lam - to) * direction > 0:
                 continue
+            if not bounds[0] <= lam <= bounds[1]:
+                continue
             try:
                 model = cycle.model.replace(**{param: lam})
             except ParameterError:
@@ -781,6 +810,7 @@ def _switch_at_period_doubling(
                         param,
                         side,
                         to if side == direction else None,
+                        bounds,
                         options,
                         False,
                         True,

@@ -136,3 +136,25 @@ def test_bad_input():
         continuation(gaitopt.model("rimless_wheel"), "spokes", to=9)
     with pytest.raises(GaitoptInputError, match=r"`step` must be > 0"):
         PseudoArclength(step=0.0)
+
+
+def test_slip_fold_in_touchdown_angle_is_where_two_apex_fixed_points_meet():
+    # Independent check of a fold (LP): slightly below the located touchdown angle the simulated
+    # apex map (Tedrake's textbook map) has two fixed points (stable and unstable); slightly
+    # above it has none.  The touchdown angle is the SLIP's per-step input and a parameter:
+    # continuation moves both.
+    from gaitopt.returnmap import fixed_points_1d
+
+    model = gaitopt.model("slip")
+    start = gaitopt.find_limit_cycle(model, {"z": 0.87})
+    branch = continuation(
+        model, "touchdown_angle", start=start, to=0.54, bounds=(0.5, 0.54), cascade=False
+    )
+    folds = [sp for sp in branch.special_points if sp.kind == "LP"]
+    assert len(folds) == 1
+    lp = folds[0].param
+    assert np.min(np.abs(folds[0].cycle.multipliers - 1)) < 1e-6
+    for offset, expected in ((-2e-4, 2), (2e-4, 0)):
+        near = model.replace(touchdown_angle=lp + offset)
+        found = fixed_points_1d(near, (0.86, 0.95), samples=40)
+        assert len(found.cycles) == expected, (offset, found.points)
