@@ -52,7 +52,11 @@ FIGURES = ("phase_portrait.png", "return_map.png", "walking.gif")
 
 
 def return_map_interval(cycle: LimitCycle) -> tuple[float, float]:
-    """Interval of the staircase plot: from 0 to twice the fixed point's section coordinate."""
+    """Interval of the staircase plot: the model's map domain if it states one, else from 0 to
+    twice the fixed point's section coordinate."""
+    domain = cycle.model.map_domain()
+    if domain is not None:
+        return domain
     s = float(cycle.section_point[0])
     if s == 0.0:
         return (-1.0, 1.0)
@@ -103,9 +107,10 @@ def run_model(name: str, out: Path) -> tuple[LimitCycle, list[str], list[str]]:
     def staircase(path: Path) -> None:
         lo, hi = return_map_interval(cycle)
         closed_form = getattr(model, "closed_form_map", None)
-        fig, _ = plotting.plot_return_map(
-            model, (lo, hi), start=lo + 0.9 * (hi - lo), closed_form=closed_form
-        )
+        # Where the model states its map's domain the staircase starts from its default start
+        # (inside the domain); otherwise near the top of (0, 2 s*).
+        start = None if model.map_domain() is not None else lo + 0.9 * (hi - lo)
+        fig, _ = plotting.plot_return_map(model, (lo, hi), start=start, closed_form=closed_form)
         plotting.save_figure(fig, path)
 
     def walking(path: Path) -> None:

@@ -221,6 +221,11 @@ class HybridModel:
     def check(self) -> None:
         """Cross-parameter checks (raise :class:`~gaitopt.errors.ParameterError`)."""
 
+    def map_domain(self) -> tuple[float, float] | None:
+        """Interval of a 1-D section coordinate where the return map can be defined, if the model
+        knows it (for plots of the map); None otherwise."""
+        return None
+
     def existence_note(self) -> str | None:
         """What closed-form theory says about the main gait's existence at these parameters, if
         anything is known (added to a failed search's message; never used to decide)."""

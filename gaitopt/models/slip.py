@@ -364,6 +364,10 @@ class Slip(HybridModel):
         NaN outside; near the top the runner falls back)."""
         return self.touchdown_height(), self.highest_apex()
 
+    def map_domain(self) -> tuple[float, float]:
+        """The apex map's domain (see :meth:`apex_domain`)."""
+        return self.apex_domain()
+
     def apex_speed(self, z: float) -> float:
         """Forward speed ``ẋ = sqrt(2 (E/m − g z))`` (m/s) at an apex of height ``z``."""
         return math.sqrt(max(2 * (self.energy / self.mass - self.gravity * z), 0.0))
