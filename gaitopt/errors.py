@@ -22,17 +22,19 @@ __all__ = [
 
 
 def did_you_mean(word: str, choices: Iterable[str]) -> str:
-    """``"did you mean 'x'? "`` for the choice closest to ``word``, or ``""``.
+    """``"did you mean 'x'? "`` (or ``'x' or 'y'``) for the choices closest to ``word``, or ``""``.
 
-    The whole name is compared first, then its ``_``-separated parts, so that ``walkr`` finds
-    ``simplest_walker``.
+    Whole names are compared first, then their ``_``-separated parts, so that ``walkr`` finds
+    both ``simplest_walker`` and ``kneed_walker``.
     """
     choices = list(choices)
-    close = difflib.get_close_matches(word, choices, n=1)
+    close = difflib.get_close_matches(word, choices, n=2)
     if not close:
-        parts = {part: choice for choice in choices for part in choice.split("_")}
-        close = [parts[p] for p in difflib.get_close_matches(word, parts, n=1, cutoff=0.75)]
-    return f"did you mean {close[0]!r}? " if close else ""
+        matches = difflib.get_close_matches(
+            word, {p for c in choices for p in c.split("_")}, n=1, cutoff=0.75
+        )
+        close = [c for c in choices if matches and matches[0] in c.split("_")]
+    return f"did you mean {' or '.join(repr(c) for c in close)}? " if close else ""
 
 
 class GaitoptInputError(ValueError):

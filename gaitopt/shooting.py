@@ -403,10 +403,17 @@ def find_limit_cycle(
     while True:
         w, converged, iterations = _solve(tr, method, w0, u, p)
         J_w, J_u, F, x_return = (np.asarray(v, dtype=float) for v in tr.linearisation(w, u, p))
+        # A "converged" point where the equations are not even finite (e.g. a negative duration
+        # reached by the line search) is no solution.
+        converged = converged and bool(np.all(np.isfinite(J_w)) and np.all(np.isfinite(F)))
         if not converged:
             break
         fine = transcription(type(model), replace(disc, steps=2 * disc.steps), steps)
-        correction = _newton_step(tr, J_w, fine.residual(w, u, p))
+        try:
+            correction = _newton_step(tr, J_w, fine.residual(w, u, p))
+        except np.linalg.LinAlgError:  # a singular shooting Jacobian: not an isolated orbit
+            converged = False
+            break
         disc_error = float(np.max(np.abs(correction)))
         if disc_error <= tol or refinements == _MAX_REFINEMENTS:
             break
@@ -508,7 +515,14 @@ def certify(
     if problem is not None:
         return fail(problem, orbit=orbit)
 
-    A, B = section_jacobians(J_w, J_u, tr.m, tr.n_g)
+    try:
+        A, B = section_jacobians(J_w, J_u, tr.m, tr.n_g)
+    except np.linalg.LinAlgError:
+        return fail(
+            "no isolated gait: the shooting equations are singular at the solution (the orbit "
+            "is not transversal to a guard, or not isolated)",
+            orbit=orbit,
+        )
     multipliers = np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
     multipliers = multipliers[np.argsort(-np.abs(multipliers))]
 

@@ -35,7 +35,6 @@ minute on 2 cores.  Never shows a figure.
 from __future__ import annotations
 
 import argparse
-import csv
 import math
 import sys
 import time
@@ -54,7 +53,7 @@ import numpy as np  # noqa: E402
 from matplotlib.colors import ListedColormap  # noqa: E402
 
 import gaitopt  # noqa: E402
-from gaitopt.files import replaced_atomically, write_json  # noqa: E402
+from gaitopt.files import write_csv, write_json  # noqa: E402
 from gaitopt.plotting import save_figure  # noqa: E402
 
 MODEL = "kneed_walker"
@@ -127,7 +126,7 @@ def follow(cycle, param: str, target: float, step: float, smallest: float = 1e-4
     value = getattr(cycle.model, param)
     step = math.copysign(step, target - value)
     while abs(target - value) > 1e-12:
-        nxt = target if abs(target - value) <= abs(step) else value + step
+        nxt = target if abs(target - value) <= abs(step) * (1 + 1e-9) else value + step
         new = _solve(cycle.model.replace(**{param: nxt}), cycle)
         if new is None:
             step /= 2
@@ -483,10 +482,7 @@ def run(out: Path, settings: Settings, workers: int) -> dict:
 
 
 def _write_csv(path: Path, fields: list[str], rows: list[dict]) -> None:
-    with replaced_atomically(path, ".csv") as tmp, open(tmp, "w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=fields, extrasaction="ignore")
-        writer.writeheader()
-        writer.writerows(rows)
+    write_csv(fields, ([row.get(k) for k in fields] for row in rows), path)
 
 
 def _figure(path, settings, table, basins, scans) -> None:

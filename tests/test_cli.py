@@ -188,7 +188,7 @@ def test_simulate_that_falls_exits_1(capsys):
 # -- bad input: exit 2, one line on stderr naming the argument and its value --------------------
 BAD_INPUT = [
     # (argv, text the single stderr line must contain)
-    (["solve", "walkr"], ["'walkr'", "simplest_walker"]),
+    (["solve", "walkr"], ["'walkr'", "'simplest_walker'", "'kneed_walker'"]),
     (["solve", "compass_gait", "--set", "slop=0.1"], ["--set slop=0.1", "'slope'"]),
     (["solve", "compass_gait", "--set", "slope=abc"], ["--set slope=abc", "not a number"]),
     (["solve", "compass_gait", "--set", "slope=-1"], ["--set slope=-1", "out of range"]),

@@ -18,7 +18,7 @@ __all__ = [
 
 REGISTRY: dict[str, type[HybridModel]] = {
     cls.name: cls
-    for cls in (VanDerPol, RimlessWheel, CompassGait, KneedWalker, SimplestWalker, Slip)
+    for cls in (VanDerPol, RimlessWheel, CompassGait, SimplestWalker, KneedWalker, Slip)
 }
 
 
