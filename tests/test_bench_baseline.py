@@ -61,8 +61,16 @@ def test_models_without_a_baseline_are_skipped():
 
 
 def test_bench_record_and_table(tmp_path):
+    # The record and its table; the control and continuation sections (minutes of work) are
+    # exercised by `make bench` itself.
     record = bench.run(
-        repeats=1, built_repeats=1, models=["rimless_wheel"], peers=False, log=lambda s: None
+        repeats=1,
+        built_repeats=1,
+        models=["rimless_wheel"],
+        peers=False,
+        control=False,
+        branches=False,
+        log=lambda s: None,
     )
     record["table"] = bench.rows(record)
     out = tmp_path / "bench.json"
