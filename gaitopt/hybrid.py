@@ -139,8 +139,9 @@ class Section:
 class Symbols:
     """Symbolic parameters and helpers for a model's ``build`` classmethod.
 
-    ``sym.p`` is the parameter vector (CasADi SX); ``sym.slope`` etc. its named entries;
-    ``sym.u`` the per-step input vector.
+    ``sym.p`` is the parameter vector (CasADi SX); ``sym.slope`` etc. its named entries (a
+    parameter wins over an input of the same name); ``sym.u`` the per-step input vector and
+    ``sym.input(name)`` one of its entries.
     """
 
     def __init__(self, specs: Sequence[ParameterSpec], inputs: Sequence[str]):
@@ -157,6 +158,13 @@ class Symbols:
         if name in self._inputs:
             return self.u[self._inputs[name]]
         raise AttributeError(f"model has no parameter or input named {name!r}")
+
+    def input(self, name: str) -> ca.SX:
+        """The per-step input ``name`` (unambiguous where a parameter has the same name, as the
+        SLIP's touchdown angle: ``sym.touchdown_angle`` is the parameter)."""
+        if name not in self._inputs:
+            raise AttributeError(f"model has no per-step input named {name!r}")
+        return self.u[self._inputs[name]]
 
     @staticmethod
     def states(*names: str) -> tuple[ca.SX, list[ca.SX]]:

@@ -326,7 +326,7 @@ class Slip(HybridModel):
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
-        return _build(cls, sym, lambda z_dot: sym.u[0])
+        return _build(cls, sym, lambda z_dot: sym.input("touchdown_angle"))
 
     def check(self) -> None:
         top = self.energy / (self.mass * self.gravity)
