@@ -748,6 +748,15 @@ def _w_of(cycle: LimitCycle, tr: Transcription) -> np.ndarray:
     return tr.pack(cycle.section_point, *_nodes_from_orbit(cycle, tr))
 
 
+def _born_at(doubled: LimitCycle, parent: LimitCycle) -> bool:
+    """Whether a period-2k orbit found next to a PD was born there: it lies near the parent
+    orbit and has the multiplier ≈ +1 into which the parent's −1 squares (another period-2k
+    orbit further away may also be found from the perturbed guess)."""
+    scale = 1 + np.max(np.abs(parent.section_point))
+    near = np.max(np.abs(doubled.section_point - parent.section_point)) < 0.2 * scale
+    return bool(near and np.min(np.abs(doubled.multipliers - 1)) < 0.3)
+
+
 def _test_functions(multipliers: np.ndarray) -> dict[str, float]:
     """Kuznetsov's test functions of a map's fixed point, from its multipliers."""
     mu = np.asarray(multipliers, dtype=complex)
@@ -797,14 +806,15 @@ def _switch_at_period_doubling(
                 model = cycle.model.replace(**{param: lam})
             except ParameterError:
                 continue
-            for amplitude in (0.3, 0.1, 0.03):
+            # Small perturbations first; large ones for strongly curved branches.
+            for amplitude in (0.1, 0.03, 0.3, 1.0, 3.0):
                 eps = amplitude * math.sqrt(offset)
                 guess = dict(zip(names, cycle.section_point + eps * v, strict=True))
                 try:
                     doubled = find_limit_cycle(model, guess, steps=steps, verify=verify, tol=tol)
                 except GaitoptInputError:
                     continue
-                if doubled.success:
+                if doubled.success and _born_at(doubled, cycle):
                     return _follow_branch(
                         doubled,
                         param,

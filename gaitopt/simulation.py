@@ -326,8 +326,19 @@ def _as_policy(model: HybridModel, inputs) -> InputPolicy:
     return lambda k, x: u
 
 
+# Interior points per integrator step where the guards are also checked (on the dense output):
+# a guard excursion shorter than a step (a wheel that rocks back onto a spoke within
+# milliseconds) is still seen.
+_CHECKS_PER_STEP = 4
+
+
 def _integrate_phase(funcs: _PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_time, method):
-    """Integrate one phase until an admissible directional crossing; locate it."""
+    """Integrate one phase until an admissible directional crossing; locate it.
+
+    A guard fires where its signed value goes from negative to non-negative after having been
+    below ``-_ARM`` in this phase (strict crossings); signs are checked at the step ends and at
+    ``_CHECKS_PER_STEP - 1`` interior points of each step, roots located by ``brentq`` on the
+    step's dense output."""
     kwargs = {"jac": funcs.jac} if method in ("Radau", "LSODA") else {}
     solver = solver_cls(funcs.rhs, t0, x0, t0 + max_time, rtol=rtol, atol=atol, **kwargs)
     n_tr = len(funcs.phase.transitions)
@@ -341,25 +352,31 @@ def _integrate_phase(funcs: _PhaseFunctions, solver_cls, t0, x0, rtol, atol, max
             return OdeSolution(ts + [ts[-1]], interpolants or [None]), None, None, "failed"
         t_old, t_new = solver.t_old, solver.t
         dense = solver.dense_output()
-        new_values = np.array([funcs.signed_guard(k, solver.y) for k in range(n_tr)])
+        grid = np.linspace(t_old, t_new, _CHECKS_PER_STEP + 1)
+        states = [dense(tt) for tt in grid[1:-1]] + [solver.y]
         best = None
         for k in range(n_tr):
-            if armed[k] and values[k] < 0 <= new_values[k]:
-                t_hit = brentq(
-                    lambda tt, k=k, dense=dense: funcs.signed_guard(k, dense(tt)),
-                    t_old,
-                    t_new,
-                    xtol=1e-15,
-                    rtol=4 * np.finfo(float).eps,
-                    maxiter=200,
-                )
-                x_hit = dense(t_hit)
-                if not funcs.admissible(k, x_hit):
-                    continue
-                if best is None or t_hit < best[0]:
-                    best = (t_hit, k, x_hit)
-        armed |= new_values < -_ARM
-        values = new_values
+            previous, was_armed = values[k], armed[k]
+            for j, x in enumerate(states, start=1):
+                current = funcs.signed_guard(k, x)
+                if was_armed and previous < 0 <= current:
+                    t_hit = brentq(
+                        lambda tt, k=k, dense=dense: funcs.signed_guard(k, dense(tt)),
+                        grid[j - 1],
+                        grid[j],
+                        xtol=1e-15,
+                        rtol=4 * np.finfo(float).eps,
+                        maxiter=200,
+                    )
+                    x_hit = dense(t_hit)
+                    if funcs.admissible(k, x_hit):
+                        if best is None or t_hit < best[0]:
+                            best = (t_hit, k, x_hit)
+                        break
+                was_armed = was_armed or current < -_ARM
+                previous = current
+            armed[k] = was_armed
+            values[k] = previous
         interpolants.append(dense)
         if best is not None:
             ts.append(best[0])

@@ -54,6 +54,11 @@ GARCIA = {
     "short": {"theta": 0.19393736960624, "theta_dot": -0.20386692731962},
 }
 GARCIA_PD = 0.0151  # first period doubling of the long gait (Garcia et al. 1998; abstract: 0.015)
+# The overview follows the period-2 and period-4 branches to the range end; the cascade is
+# resolved with fine steps from ZOOM_FROM (below the first PD) to CASCADE_TO (past its
+# accumulation, γ ≈ 0.01829).
+OVERVIEW_PERIOD = 4
+ZOOM_FROM, CASCADE_TO = 0.0145, 0.0187
 FIT_BELOW = 1e-3  # the small-γ part of the branches where θ* ∝ γ^p is fitted
 FEIGENBAUM = 4.669201609
 
@@ -68,10 +73,11 @@ def main(argv: list[str] | None = None) -> int:
     folder = Path(args.out) / "simplest_walker_slope"
     folder.mkdir(parents=True, exist_ok=True)
     if args.fast:
-        top, bottom, per_decade, max_period = 0.02, 1e-4, 3, 4
-    else:
-        top, bottom, per_decade, max_period = 0.05, 1e-5, 6, 16  # 0.05: the slope's range end
+        top, bottom, per_decade, zoom_step, zoom_period = 0.02, 1e-4, 3, 0.004, 8
+    else:  # 0.05: the end of the slope's range
+        top, bottom, per_decade, zoom_step, zoom_period = 0.05, 1e-5, 6, 0.002, 16
     options = gaitopt.PseudoArclength(step=0.02, max_step=0.05)
+    fine = gaitopt.PseudoArclength(step=zoom_step, max_step=zoom_step, max_points=1000)
 
     model = gaitopt.model("simplest_walker", slope=START)
     t0 = time.perf_counter()
@@ -80,43 +86,16 @@ def main(argv: list[str] | None = None) -> int:
         if not cycle.success:
             raise SystemExit(f"no {name}-step gait at γ = {START}: {cycle.message}")
 
-    # -- up the slope, with the cascade ------------------------------------------------------
-    library_error = None
-    try:
-        up_long = gaitopt.continuation(
-            model,
-            "slope",
-            to=top,
-            start=starts["long"],
-            cascade=True,
-            max_period=max_period,
-            options=options,
-        )
-    except np.linalg.LinAlgError as error:  # see _audit_cascade: a library failure, reported
-        library_error = f"continuation(cascade=True) raised LinAlgError: {error}"
-        up_long = gaitopt.continuation(
-            model, "slope", to=top, start=starts["long"], cascade=False, options=options
-        )
-    library_children = [
-        {
-            "steps": b.steps,
-            "first_param": float(b.params[0]),
-            "first_multipliers": b.cycles[0].multipliers,
-        }
-        for b in up_long.descendants()[1:]
-    ]
-    audit: list[dict] = []
-    _audit_cascade(up_long, top, options, max_period, audit)
-    up_short = gaitopt.continuation(
-        model,
-        "slope",
-        to=top,
-        start=starts["short"],
-        cascade=True,
-        max_period=max_period,
-        options=options,
-    )
+    # -- up the slope to the range end, with the first doublings (overview) -----------------
+    up_long, overview_log = _cascade(starts["long"], top, OVERVIEW_PERIOD, options)
+    up_short, _ = _cascade(starts["short"], top, OVERVIEW_PERIOD, options)
     t_up = time.perf_counter() - t0
+
+    # -- the cascade, resolved: fine steps from just below the first PD to CASCADE_TO --------
+    t0 = time.perf_counter()
+    below = [c for c in up_long.cycles if c.model.slope <= ZOOM_FROM]
+    cascade, cascade_log = _cascade(below[-1], CASCADE_TO, zoom_period, fine)
+    t_cascade = time.perf_counter() - t0
 
     # -- down the slope, in legs that land on log-spaced slopes (points for the fit) ----------
     t0 = time.perf_counter()
@@ -140,17 +119,15 @@ def main(argv: list[str] | None = None) -> int:
     t_down = time.perf_counter() - t0
 
     # -- outputs ---------------------------------------------------------------------------------
-    write_json({name: b.as_dict() for name, b in families.items()}, folder / "branches.json")
-    for name, b in families.items():
+    write_json(
+        {**{name: b.as_dict() for name, b in families.items()}, "cascade": cascade.as_dict()},
+        folder / "branches.json",
+    )
+    for name, b in (*families.items(), ("cascade", cascade)):
         write_csv(*b.csv_rows(), folder / f"{name}.csv")
 
-    pds = [
-        {"period": b.steps, "to_period": 2 * b.steps, "slope": sp.param}
-        for b in families["long"].descendants()
-        for sp in b.special_points
-        if sp.kind == "PD"
-    ]
-    pds.sort(key=lambda d: d["period"])
+    pds = _period_doublings(cascade)
+    overview_pds = _period_doublings(families["long"])
     pd_slopes = [d["slope"] for d in pds]
     ratios = [
         (pd_slopes[i + 1] - pd_slopes[i]) / (pd_slopes[i + 2] - pd_slopes[i + 1])
@@ -195,6 +172,8 @@ def main(argv: list[str] | None = None) -> int:
         "slope_range": [float(bottom), float(top)],
         "gaits_at_0.009": at_start,
         "period_doublings": pds,
+        "period_doublings_overview": overview_pds,
+        "cascade_window": [float(cascade.params.min()), CASCADE_TO],
         "first_period_doubling": {
             "continuation": pd_slopes[0] if pd_slopes else None,
             "garcia": GARCIA_PD,
@@ -205,21 +184,18 @@ def main(argv: list[str] | None = None) -> int:
         "families": ends,
         "scaling": fits,
         "cascade": {
-            "max_period": max_period,
-            "library_children": library_children,
-            "library_error": library_error,
-            "audit": audit,
+            "max_period": zoom_period,
+            "overview_max_period": OVERVIEW_PERIOD,
+            "overview": overview_log,
+            "resolved": cascade_log,
         },
-        "timing_s": {"up_with_cascade": t_up, "down": t_down},
+        "timing_s": {"up": t_up, "cascade": t_cascade, "down": t_down},
     }
     write_json(summary, folder / "summary.json")
 
     # -- figures ---------------------------------------------------------------------------------
-    _bifurcation_figure(families, folder / "bifurcation.png", pds, zoom=None)
-    if pd_slopes:
-        lo = pd_slopes[0] - 0.2 * (pd_slopes[-1] - pd_slopes[0]) - 5e-4
-        hi = min(top, (accumulation or pd_slopes[-1]) + 0.0008)
-        _bifurcation_figure(families, folder / "cascade.png", pds, zoom=(lo, hi))
+    _bifurcation_figure(families, folder / "bifurcation.png")
+    _cascade_figure(cascade, pds, accumulation, folder / "cascade.png")
     _scaling_figure(families, fits, folder / "scaling.png")
 
     print(
@@ -244,9 +220,13 @@ def main(argv: list[str] | None = None) -> int:
         )
     for name, e in ends.items():
         print(f"{name}-step family: {e['message']}")
-    for entry in audit:
-        print(f"cascade: {entry['note']}")
-    print(f"continuation up {t_up:.1f} s, down {t_down:.1f} s; wrote {folder}")
+    for label, log in (("overview", overview_log), ("resolved cascade", cascade_log)):
+        for entry in log["audit"]:
+            print(f"{label}: {entry['note']}")
+    print(
+        f"continuation up {t_up:.1f} s, cascade {t_cascade:.1f} s, down {t_down:.1f} s; "
+        f"wrote {folder}"
+    )
     return 0
 
 
@@ -269,6 +249,41 @@ def _joined(down: list, up: Branch, down_message: str) -> Branch:
         children=up.children,
         message=f"{down_message}; up: {up.message}",
     )
+
+
+def _cascade(start, to: float, max_period: int, options) -> tuple[Branch, dict]:
+    """``continuation(..., cascade=True)`` from ``start`` to ``to``, then the period-doubled
+    branches audited (:func:`_audit_cascade`); returns the branch and what was found."""
+    branch = gaitopt.continuation(
+        start.model,
+        "slope",
+        to=to,
+        start=start,
+        cascade=True,
+        max_period=max_period,
+        options=options,
+    )
+    library = [
+        {
+            "steps": b.steps,
+            "first_param": float(b.params[0]),
+            "first_multipliers": b.cycles[0].multipliers,
+        }
+        for b in branch.descendants()[1:]
+    ]
+    audit: list[dict] = []
+    _audit_cascade(branch, to, options, max_period, audit)
+    return branch, {"library_children": library, "audit": audit}
+
+
+def _period_doublings(branch: Branch) -> list[dict]:
+    pds = [
+        {"period": b.steps, "to_period": 2 * b.steps, "slope": sp.param}
+        for b in branch.descendants()
+        for sp in b.special_points
+        if sp.kind == "PD"
+    ]
+    return sorted(pds, key=lambda d: d["period"])
 
 
 def _born_at(child: Branch, sp) -> bool:
@@ -301,7 +316,7 @@ def _switch(sp, to: float, options, max_period: int) -> Branch | None:
             )
             try:
                 doubled = gaitopt.find_limit_cycle(model, guess, steps=2 * cycle.steps)
-            except (GaitoptInputError, np.linalg.LinAlgError):
+            except GaitoptInputError:
                 continue
             if doubled.success and np.min(np.abs(doubled.multipliers - 1)) < 0.25:
                 return gaitopt.continuation(
@@ -355,7 +370,7 @@ def _audit_cascade(branch: Branch, to: float, options, max_period: int, log: lis
                         f"{', '.join(f'{abs(z):.3g}' for z in rejected[0]['first_multipliers'])}, "
                         "not born at the PD); "
                         if rejected
-                        else "no library child; "
+                        else "on a branch switched by this study (followed with cascade=False); "
                     )
                     + ("switched with a small perturbation" if child else "switching failed")
                 ),
@@ -395,7 +410,8 @@ def _scaling_fit(branch: Branch) -> dict:
     }
 
 
-def _bifurcation_figure(families: dict, path: Path, pds: list, zoom) -> None:
+def _bifurcation_figure(families: dict, path: Path) -> None:
+    """Both families over the whole slope range (the short one in grey)."""
     fig, (top, bottom) = plot_branch(families["long"], coordinate="theta")
     n_top, n_bottom = len(top.lines), len(bottom.lines)
     plot_branch(families["short"], coordinate="theta", axes=(top, bottom))
@@ -409,42 +425,50 @@ def _bifurcation_figure(families: dict, path: Path, pds: list, zoom) -> None:
             line.set_label("long step, period 1")
     top.legend(fontsize=8, loc="upper left")
     top.set_ylabel(r"step angle $\theta^*$ just after heel strike (rad)")
-    bottom.set_xlabel(r"slope $\gamma$ (rad)")
     bottom.set_yscale("log")
+    bottom.set_xlabel(r"slope $\gamma$ (rad)")
     top.set_title(
         "Simplest walker (Garcia et al. 1998): gaits vs slope (solid stable, dotted unstable)",
         fontsize=10,
     )
-    if zoom is not None:
-        lo, hi = zoom
-        for ax in (top, bottom):
-            ax.set_xlim(lo, hi)
-        _autoscale_y(top, lo, hi)
-        bottom.set_ylim(0.3, 10)
-        text = "\n".join(f"PD {d['period']}→{d['to_period']}: γ = {d['slope']:.7f}" for d in pds)
-        text += f"\nGarcia et al. 1998: first PD at γ ≈ {GARCIA_PD}"
-        top.text(
-            0.98,
-            0.03,
-            text,
-            transform=top.transAxes,
-            ha="right",
-            va="bottom",
-            fontsize=8,
-            bbox={"fc": "white", "ec": "0.7", "alpha": 0.9},
-        )
     save_figure(fig, path)
 
 
-def _autoscale_y(ax, lo: float, hi: float) -> None:
-    ys = []
-    for line in ax.lines:
-        x, y = (np.asarray(v, dtype=float) for v in line.get_data())
-        sel = (x >= lo) & (x <= hi) & np.isfinite(y)
-        ys.extend(y[sel])
-    if ys:
-        pad = 0.05 * (max(ys) - min(ys) + 1e-9)
-        ax.set_ylim(min(ys) - pad, max(ys) + pad)
+def _cascade_figure(cascade: Branch, pds: list, accumulation: float | None, path: Path) -> None:
+    """The period-doubling cascade of the long gait, resolved, with its PDs tabulated."""
+    fig, (top, bottom) = plt.subplots(
+        2,
+        1,
+        sharex=True,
+        figsize=(9, 8),
+        gridspec_kw={"height_ratios": [2, 1]},
+        layout="constrained",
+    )
+    plot_branch(cascade, coordinate="theta", axes=(top, bottom))
+    bottom.set_yscale("log")
+    bottom.set_ylim(0.1, 20)
+    bottom.set_xlabel(r"slope $\gamma$ (rad)")
+    top.set_ylabel(r"step angle $\theta$ just after each heel strike (rad)")
+    top.set_title(
+        "Simplest walker: the long gait's period-doubling cascade (solid stable, dotted unstable)",
+        fontsize=10,
+    )
+    text = "\n".join(f"PD {d['period']}→{d['to_period']}: γ = {d['slope']:.8f}" for d in pds)
+    if accumulation is not None:
+        text += f"\naccumulation (Feigenbaum δ) ≈ {accumulation:.5f}"
+    text += f"\nGarcia et al. 1998: first PD at γ ≈ {GARCIA_PD}"
+    top.text(
+        0.2,
+        0.97,
+        text,
+        transform=top.transAxes,
+        ha="left",
+        va="top",
+        fontsize=8,
+        bbox={"fc": "white", "ec": "0.7", "alpha": 0.9},
+    )
+    top.legend(fontsize=8, loc="upper left")
+    save_figure(fig, path)
 
 
 def _scaling_figure(families: dict, fits: dict, path: Path) -> None:

@@ -84,6 +84,8 @@ def test_period_two_branch_after_switching_is_genuine(compass_branch):
     assert child.params[0] == pytest.approx(pd, abs=2e-3)
     for cycle in child.cycles:
         assert cycle.success and cycle.verified and cycle.steps == 2
+    # born at the doubling: the parent's multiplier −1 squares to +1 for the period-2 map
+    assert np.min(np.abs(child.cycles[0].multipliers - 1)) < 0.3
     last = child.cycles[-1]
     sim = gaitopt.simulate(last.model, last.x, steps=2)
     assert np.max(np.abs(sim.section_states[1] - last.x)) > 1e-3

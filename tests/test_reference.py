@@ -216,3 +216,15 @@ def test_warm_start_from_a_previous_orbit_after_a_parameter_change(cycles):
     assert warm.success and cold.success
     np.testing.assert_allclose(warm.x, cold.x, atol=1e-10)
     assert warm.period == pytest.approx(cold.period, abs=1e-10)
+
+
+def test_simulation_sees_an_impact_within_one_integrator_step():
+    # Regression: near slope π/spokes a slow rocking start strikes the uphill spoke and swings
+    # back onto the downhill one within milliseconds — inside one adaptive step.  The rocking
+    # branch of the closed-form map (cos² 2α · ω, Tedrake's energy and momentum arguments) must
+    # still come out.
+    model = gaitopt.model("rimless_wheel", slope=0.3)
+    sim = gaitopt.simulate(model, {"theta_dot": 0.029}, steps=1)
+    assert [e.transition for e in sim.events] == ["backward step", "forward step"]
+    # tolerance 1e-9: simulation at rtol 1e-11, as for the other simulated maps
+    assert sim.section_states[-1][1] == pytest.approx(model.closed_form_map(0.029), abs=1e-9)
