@@ -4,21 +4,24 @@ from __future__ import annotations
 
 from ..errors import ParameterError, UnknownModelError, did_you_mean
 from ..hybrid import HybridModel
+from .bouncing_ball import BouncingBall
 from .compass_gait import CompassGait
 from .kneed_walker import KneedWalker
+from .line_juggler import LineJuggler
 from .rimless_wheel import RimlessWheel
 from .simplest_walker import SimplestWalker
 from .slip import Slip
 from .vanderpol import VanDerPol
 
 __all__ = [
-    "REGISTRY", "model", "CompassGait", "KneedWalker", "RimlessWheel", "SimplestWalker", "Slip",
-    "VanDerPol",
+    "REGISTRY", "model", "BouncingBall", "CompassGait", "KneedWalker", "LineJuggler",
+    "RimlessWheel", "SimplestWalker", "Slip", "VanDerPol",
 ]  # fmt: skip
 
 REGISTRY: dict[str, type[HybridModel]] = {
     cls.name: cls
     for cls in (VanDerPol, RimlessWheel, CompassGait, SimplestWalker, KneedWalker, Slip)
+    + (BouncingBall, LineJuggler)
 }
 
 
