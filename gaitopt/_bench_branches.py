@@ -146,7 +146,8 @@ def table(result: dict[str, Any]) -> str:
         "Continuation and sweeps (issue 4):",
         f"  points along a branch: {b['points']} certified gaits in {b['seconds']:.2f} s = "
         f"{b['points_per_second']:.0f} points/s (each verified by simulation: {b['verified']})",
-        f"  compass gait vs slope, continuation to period {2 ** (len(s['period_doublings']))}: "
+        f"  compass gait vs slope, continuation through {len(s['period_doublings'])} period "
+        f"doublings: "
         f"{s['continuation_seconds']:.1f} s, {s['continuation_gaits']} gaits, first PD at "
         f"{s['first_pd_continuation']:.10f} (located to 1e-10)",
         f"  brute-force orbit diagram, {s['orbit_diagram_slopes']} slopes at resolution "
