@@ -8,20 +8,37 @@ from .bouncing_ball import BouncingBall
 from .compass_gait import CompassGait
 from .kneed_walker import KneedWalker
 from .line_juggler import LineJuggler
+from .planar_juggler import PlanarJuggler
+from .raibert_hopper import RaibertHopper
 from .rimless_wheel import RimlessWheel
 from .simplest_walker import SimplestWalker
 from .slip import Slip
 from .vanderpol import VanDerPol
+from .vertical_hopper import VerticalHopper
 
 __all__ = [
     "REGISTRY", "model", "BouncingBall", "CompassGait", "KneedWalker", "LineJuggler",
+    "PlanarJuggler",
+    "RaibertHopper",
     "RimlessWheel", "SimplestWalker", "Slip", "VanDerPol",
+    "VerticalHopper",
 ]  # fmt: skip
 
 REGISTRY: dict[str, type[HybridModel]] = {
     cls.name: cls
-    for cls in (VanDerPol, RimlessWheel, CompassGait, SimplestWalker, KneedWalker, Slip)
-    + (BouncingBall, LineJuggler)
+    for cls in (
+        VanDerPol,
+        RimlessWheel,
+        CompassGait,
+        SimplestWalker,
+        KneedWalker,
+        Slip,
+        VerticalHopper,
+        RaibertHopper,
+        BouncingBall,
+        LineJuggler,
+        PlanarJuggler,
+    )
 }
 
 

@@ -1,0 +1,439 @@
+"""The planar Raibert hopper: a body with pitch inertia on a light springy leg, Raibert's
+three-part controller in the loop.
+
+Raibert 1986, *Legged Robots That Balance* (MIT Press), ch. 2–3; Raibert, Brown & Chepponis 1984,
+"Experiments in balance with a 2D one-legged hopping machine" (ASME J. Dyn. Sys. Meas. Control
+106).  The body (mass ``M``, pitch inertia ``J`` about its centre of mass, which is at the hip)
+rides on a massless leg: a spring of stiffness ``k`` with viscous loss ``c``, whose rest length is
+``l0`` in flight and ``l0 + δ`` in stance (``δ`` = ``thrust``).  A hip actuator between body and
+leg positions the massless leg in flight (kinematically: no torque on the body) and servoes the
+body's pitch in stance.
+
+**Raibert's three-part controller**, inside the dynamics (its gains are parameters):
+
+* *hopping height* by a fixed thrust: the rest length is ``l0 + δ`` throughout stance, so each
+  stance gives the body ``½ k δ²`` and the leg's loss takes energy away; the apex height settles
+  where they balance (Raibert 1986 §2.2 uses a fixed thrust, here lumped over the whole stance);
+* *forward speed* by foot placement: at touchdown the foot is ``x_f`` ahead of the hip,
+
+      x_f = ẋ T_s/2 + k_ẋ (ẋ − ẋ_d),    T_s = π sqrt(M/k)
+
+  (Raibert 1986 eq. 2.4; ``T_s`` the expected stance time, here the half period of the body on the
+  spring; ``ẋ`` is constant in flight), i.e. the touchdown angle ``θ_td = asin(x_f / l0)``;
+* *body attitude* by the hip servo in stance, ``τ = −k_p (φ − φ_d) − k_v φ̇`` with ``φ_d = 0``
+  (Raibert 1986 eq. 2.5).
+
+One hop, from apex to apex, is three phases:
+
+* **descent** (flight, state ``x, z, phi, x_dot, z_dot, phi_dot``: hip position, ``x`` from the
+  last apex, ``z`` above the ground; body pitch ``phi``, counter-clockwise = nose up): ballistic,
+  ``ẍ = 0, z̈ = −g, φ̈ = 0``.  **Touchdown** when the foot reaches the ground,
+  ``z − l0 cos θ_td = 0`` with ``z`` falling.
+* **stance** (polar coordinates of the hip about the foot, state ``r, theta, phi, r_dot,
+  theta_dot, phi_dot``; ``theta`` from vertical, positive when the hip is ahead of the foot, so
+  touchdown is at ``theta = −θ_td``).  The massless leg carries the spring force
+  ``F = k (l0 + δ − r) − c ṙ`` along itself and, to balance the hip torque about the hip, a
+  ground force ``τ / r`` across itself; the body gets both and the torque ``τ``::
+
+      M (r̈ − r θ̇²)     = F − M g cos θ
+      M (r θ̈ + 2 ṙ θ̇)  = τ / r + M g sin θ
+      J φ̈              = τ
+
+  The ground force acts at the foot and the hip torque is internal, so the angular momentum
+  about the foot (counter-clockwise), ``H = J φ̇ − M r² θ̇``, changes only by gravity's moment,
+  ``Ḣ = −M g r sin θ`` (checked in the tests; not used in the derivation).
+  **Liftoff** when the leg force falls to zero, ``F = 0`` decreasing.
+* **ascent** (flight, ``x`` from the foot): ballistic up to the **apex**, ``ż = 0`` falling, where
+  ``x`` is reset to 0 — the Poincaré section.
+
+Section: the apex (``x = 0``, ``ż = 0``), coordinates ``z, phi, x_dot, phi_dot``: four
+multipliers.  Nothing is conserved over a hop (thrust, loss and hip work), and no coordinate is
+cyclic (the attitude servo holds the absolute pitch), so none is trivial.
+
+Falls are terminal transitions: the hip reaches the ground (apex below the touchdown height, in
+stance, or no apex after liftoff) and the body tips over (``|φ| = π/2``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import casadi as ca
+import numpy as np
+
+from ..errors import ParameterError
+from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
+from ..parameters import parameter
+
+__all__ = ["RaibertHopper", "FLIGHT_STATES", "STANCE_STATES"]
+
+_RAIBERT = "Raibert 1986, Legged Robots That Balance"
+_SIZE = "illustrative, of the size of Raibert's planar one-legged machine (Raibert et al. 1984)"
+FLIGHT_STATES = ("x", "z", "phi", "x_dot", "z_dot", "phi_dot")
+STANCE_STATES = ("r", "theta", "phi", "r_dot", "theta_dot", "phi_dot")
+#: Largest |x_f| / l0 the foot-placement law may ask for (the leg stays below the hip).
+_MAX_REACH = 0.95
+
+
+def touchdown_angle_law(sym_or_values, x_dot):
+    """``θ_td = asin(x_f / l0)``, ``x_f = ẋ T_s/2 + k_ẋ (ẋ − ẋ_d)``, ``T_s = π sqrt(M/k)``;
+    works on CasADi symbols (``Symbols``) and on a :class:`RaibertHopper` (floats)."""
+    s = sym_or_values
+    x_f = foot_placement(s, x_dot)
+    ratio = x_f / s.rest_length
+    if isinstance(ratio, (ca.SX, ca.MX)):
+        return ca.asin(ca.fmax(-_MAX_REACH, ca.fmin(_MAX_REACH, ratio)))
+    return math.asin(max(-_MAX_REACH, min(_MAX_REACH, float(ratio))))
+
+
+def foot_placement(s, x_dot):
+    """Raibert's foot placement ``x_f = ẋ T_s/2 + k_ẋ (ẋ − ẋ_d)`` (m ahead of the hip)."""
+    sqrt = ca.sqrt if isinstance(s, Symbols) else math.sqrt
+    t_s = math.pi * sqrt(s.mass / s.stiffness)
+    return x_dot * t_s / 2 + s.k_speed * (x_dot - s.desired_speed)
+
+
+@dataclass(frozen=True)
+class RaibertHopper(HybridModel):
+    """Planar Raibert hopper: apex state ``x, z`` (m), ``phi`` (rad), ``x_dot, z_dot`` (m/s),
+    ``phi_dot`` (rad/s); stance ``r`` (m), ``theta``, ``phi`` (rad), ``r_dot``, ``theta_dot``,
+    ``phi_dot``; section at the apex, coordinates ``z, phi, x_dot, phi_dot``; no per-step input
+    (Raibert's controller is inside the dynamics)."""
+
+    name = "raibert_hopper"
+    title = "Planar Raibert hopper (three-part controller)"
+    reference = "Raibert 1986; Raibert, Brown & Chepponis 1984"
+    mesh = (4, 4)
+    max_phase_time: ClassVar[float] = 5.0
+
+    mass: float = parameter(
+        10.0, unit="kg", doc="body mass M", source=_SIZE, low=0.0, high=1e4, low_open=True
+    )
+    inertia: float = parameter(
+        0.5,
+        unit="kg m^2",
+        doc="body pitch inertia J about its centre of mass (at the hip)",
+        source=_SIZE,
+        low=0.0,
+        high=1e4,
+        low_open=True,
+    )
+    rest_length: float = parameter(
+        0.5, unit="m", doc="leg rest length l0 in flight", source=_SIZE, low=0.0, high=10.0,
+        low_open=True,
+    )  # fmt: skip
+    stiffness: float = parameter(
+        4000.0,
+        unit="N/m",
+        doc="leg spring stiffness k (k l0/(M g) = 20.4; expected stance time π sqrt(M/k) = "
+        "0.157 s)",
+        source=_SIZE,
+        low=0.0,
+        high=1e7,
+        low_open=True,
+    )
+    damping: float = parameter(
+        20.0,
+        unit="N s/m",
+        doc="leg viscous loss c (damping ratio c/(2 sqrt(k M)) = 0.05)",
+        source="a lightly damped leg (the air spring's losses, Raibert 1986 §2.2)",
+        low=0.0,
+        high=1e5,
+    )
+    thrust: float = parameter(
+        0.04,
+        unit="m",
+        doc="thrust δ: the leg's rest length in stance is l0 + δ (height control)",
+        source="sets the hop: ½ k δ² = 3.2 J a hop balances the leg's loss near a 0.1 m hop",
+        low=0.0,
+        high=1.0,
+    )
+    desired_speed: float = parameter(
+        1.0,
+        unit="m/s",
+        doc="desired forward speed ẋ_d of the foot-placement law",
+        source="a brisk hop for this size (Raibert's machines ran at 0.5–2 m/s)",
+        low=-10.0,
+        high=10.0,
+    )
+    k_speed: float = parameter(
+        0.05,
+        unit="s",
+        doc="speed gain k_ẋ of the foot-placement law x_f = ẋ T_s/2 + k_ẋ (ẋ − ẋ_d)",
+        source=_RAIBERT + ", §2.3 (gains of a few hundredths of a second)",
+        low=-1.0,
+        high=1.0,
+    )
+    k_attitude: float = parameter(
+        400.0,
+        unit="N m/rad",
+        doc="proportional gain k_p of the stance attitude servo τ = −k_p φ − k_v φ̇",
+        source="sqrt(k_p/J) = 28 rad/s: the servo settles within a stance (ω T_s = 4.4)",
+        low=0.0,
+        high=1e5,
+    )
+    d_attitude: float = parameter(
+        20.0,
+        unit="N m s/rad",
+        doc="derivative gain k_v of the stance attitude servo (damping ratio k_v/(2 sqrt(k_p J)) "
+        "= 0.71)",
+        source="a well-damped servo",
+        low=0.0,
+        high=1e5,
+    )
+    gravity: float = parameter(
+        9.81,
+        unit="m/s^2",
+        doc="gravitational acceleration g",
+        source="standard gravity",
+        low=0.0,
+        high=100.0,
+        low_open=True,
+    )
+
+    @classmethod
+    def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
+        M, J, l0, k, c, delta, g = (
+            sym.mass,
+            sym.inertia,
+            sym.rest_length,
+            sym.stiffness,
+            sym.damping,
+            sym.thrust,
+            sym.gravity,
+        )
+        kp, kv = sym.k_attitude, sym.d_attitude
+        bar = ca.sqrt(3 * J / M)  # half-length of a uniform bar with this inertia (drawing only)
+
+        # -- flight: descent from the apex, foot placed by the speed controller --------------
+        xf, (x, z, phi, x_dot, z_dot, phi_dot) = sym.states(*FLIGHT_STATES)
+        ballistic = sym.function("flow", xf, ca.vertcat(x_dot, z_dot, phi_dot, 0, -g, 0))
+        theta_td = touchdown_angle_law(sym, x_dot)
+        dx, dz = -l0 * ca.sin(theta_td), z  # hip relative to the foot at touchdown
+        touchdown = Transition(
+            name="touchdown",
+            guard=sym.function("guard", xf, z - l0 * ca.cos(theta_td)),  # z − l0 cos θ_td
+            direction=-1,
+            # Polar coordinates of the hip about the foot x + x_f; the body's pitch unchanged.
+            reset=sym.function(
+                "reset",
+                xf,
+                ca.vertcat(
+                    ca.sqrt(dx**2 + dz**2),
+                    ca.atan2(dx, dz),
+                    phi,
+                    (dx * x_dot + dz * z_dot) / ca.sqrt(dx**2 + dz**2),
+                    (dz * x_dot - dx * z_dot) / (dx**2 + dz**2),
+                    phi_dot,
+                ),
+            ),
+            target=1,
+            impact=False,  # a massless leg: no velocity changes
+            foothold="foot",
+            doc="foot reaches the ground: z − l0·cos θ_td = 0, falling, θ_td = asin(x_f/l0) from "
+            "Raibert's foot placement; the hip in polar coordinates about the foot",
+        )
+
+        def ground(name: str, what: str) -> Transition:
+            return Transition(
+                name=name,
+                guard=sym.function("guard", xf, z),
+                direction=-1,
+                reset=None,
+                target=None,
+                doc=what,
+            )
+
+        def tips_over(x_state: ca.SX, pitch: ca.SX) -> Transition:
+            return Transition(
+                name="body tips over (|phi| = pi/2)",
+                guard=sym.function("guard", x_state, ca.cos(pitch)),
+                direction=-1,
+                reset=None,
+                target=None,
+                doc="the body's pitch reaches ±90°",
+            )
+
+        flight_energy = sym.conserved(
+            "energy",
+            xf,
+            0.5 * M * (x_dot**2 + z_dot**2) + 0.5 * J * phi_dot**2 + M * g * z,
+        )
+
+        def flight_points(x_hip: ca.SX, z_hip: ca.SX, below: ca.SX) -> ca.Function:
+            # The leg drawn at the parameters' touchdown angle for the desired speed.
+            th = touchdown_angle_law(sym, sym.desired_speed)
+            return ca.Function(
+                "points",
+                [xf, sym.p],
+                [
+                    ca.horzcat(
+                        ca.vertcat(x_hip, z_hip),
+                        ca.vertcat(x_hip + l0 * ca.sin(th), z_hip - l0 * ca.cos(th)),
+                        ca.vertcat(x_hip + bar * ca.cos(phi), z_hip + bar * ca.sin(phi)),
+                        ca.vertcat(x_hip - bar * ca.cos(phi), z_hip - bar * ca.sin(phi)),
+                        ca.vertcat(x_hip, below),
+                    )
+                ],
+            )
+
+        descent = Phase(
+            "descent",
+            FLIGHT_STATES,
+            ballistic,
+            (
+                touchdown,
+                ground(
+                    "apex below touchdown height (hip reaches the ground)",
+                    "fires only if touchdown never armed: the apex was below l0·cos θ_td",
+                ),
+                tips_over(xf, phi),
+            ),
+            {"energy": flight_energy},
+            points=flight_points(x, z, ca.SX(0)),
+            point_names=("hip", "foot", "nose", "tail", "origin"),
+        )
+
+        # -- stance: polar coordinates about the foot; thrust, loss and the attitude servo ---
+        xs, (r, th, phi_s, r_dot, th_dot, phi_dot_s) = sym.states(*STANCE_STATES)
+        force = k * (l0 + delta - r) - c * r_dot  # along the leg, pushing the body up
+        tau = -kp * phi_s - kv * phi_dot_s  # hip torque on the body (counter-clockwise)
+        stance_flow = sym.function(
+            "flow",
+            xs,
+            ca.vertcat(
+                r_dot,
+                th_dot,
+                phi_dot_s,
+                r * th_dot**2 + force / M - g * ca.cos(th),
+                (tau / (M * r) + g * ca.sin(th) - 2 * r_dot * th_dot) / r,
+                tau / J,
+            ),
+        )
+        hip_x, hip_z = r * ca.sin(th), r * ca.cos(th)
+        hip_xd = r_dot * ca.sin(th) + r * th_dot * ca.cos(th)
+        hip_zd = r_dot * ca.cos(th) - r * th_dot * ca.sin(th)
+        liftoff = Transition(
+            name="liftoff",
+            guard=sym.function("guard", xs, force),  # F = k (l0 + δ − r) − c ṙ = 0, falling
+            direction=-1,
+            reset=sym.function(
+                "reset", xs, ca.vertcat(hip_x, hip_z, phi_s, hip_xd, hip_zd, phi_dot_s)
+            ),
+            target=2,
+            impact=False,
+            doc="the leg force falls to zero, k (l0 + δ − r) − c ṙ = 0; Cartesian flight state "
+            "with x from the foot (the massless leg then returns to l0)",
+        )
+        collapses = Transition(
+            name="falls (hip reaches the ground in stance)",
+            guard=sym.function("guard", xs, hip_z),
+            direction=-1,
+            reset=None,
+            target=None,
+            doc="the hip reaches the foot's level",
+        )
+        stance_points = ca.Function(
+            "points",
+            [xs, sym.p],
+            [
+                ca.horzcat(
+                    ca.vertcat(hip_x, hip_z),
+                    ca.DM.zeros(2, 1),
+                    ca.vertcat(hip_x + bar * ca.cos(phi_s), hip_z + bar * ca.sin(phi_s)),
+                    ca.vertcat(hip_x - bar * ca.cos(phi_s), hip_z - bar * ca.sin(phi_s)),
+                )
+            ],
+        )
+        stance = Phase(
+            "stance",
+            STANCE_STATES,
+            stance_flow,
+            (liftoff, collapses, tips_over(xs, phi_s)),
+            {},  # thrust, loss and hip work: nothing conserved
+            points=stance_points,
+            point_names=("hip", "foot", "nose", "tail"),
+        )
+
+        # -- flight: ascent to the apex --------------------------------------------------------
+        apex = Transition(
+            name="apex",
+            guard=sym.function("guard", xf, z_dot),  # ż = 0, falling
+            direction=-1,
+            reset=sym.function("reset", xf, ca.vertcat(0, z, phi, x_dot, z_dot, phi_dot)),
+            target=0,
+            impact=False,
+            foothold="below_hip",
+            doc="top of the flight, ż = 0 falling; x is measured from here on",
+        )
+        ascent = Phase(
+            "ascent",
+            FLIGHT_STATES,
+            ballistic,
+            (
+                apex,
+                ground("falls (no apex after liftoff)", "lifted off falling: no apex"),
+                tips_over(xf, phi),
+            ),
+            {"energy": flight_energy},
+            points=flight_points(x, z, ca.SX(0)),
+            point_names=("hip", "foot", "nose", "tail", "below_hip"),
+        )
+
+        # -- the apex section: x = 0, ż = 0; z, φ, ẋ, φ̇ free -------------------------------
+        s = ca.SX.sym("s", 4)
+        section = Section(
+            ("z", "phi", "x_dot", "phi_dot"),
+            sym.lift(s, ca.vertcat(0, s[0], s[1], s[2], 0, s[3])),
+            "apex: z_dot = 0, x = 0",
+        )
+        return (descent, stance, ascent), section
+
+    def check(self) -> None:
+        if self.thrust == 0 and self.damping == 0:
+            raise ParameterError(
+                "raibert_hopper: `thrust` = 0 and `damping` = 0 make the leg force zero at "
+                "touchdown (liftoff at once); give the leg a thrust or a loss"
+            )
+
+    # -- controller quantities -------------------------------------------------------------------
+    @property
+    def expected_stance_time(self) -> float:
+        """``T_s = π sqrt(M/k)`` (s): the foot-placement law's stance time."""
+        return math.pi * math.sqrt(self.mass / self.stiffness)
+
+    def foot_placement(self, x_dot: float) -> float:
+        """Raibert's ``x_f = ẋ T_s/2 + k_ẋ (ẋ − ẋ_d)`` (m ahead of the hip at touchdown)."""
+        return float(foot_placement(self, x_dot))
+
+    def neutral_point_estimate(self, x_dot: float, stance_time: float | None = None) -> float:
+        """Raibert's neutral point ``ẋ T_s / 2`` (m), with ``T_s`` expected unless given."""
+        t_s = self.expected_stance_time if stance_time is None else stance_time
+        return x_dot * t_s / 2
+
+    def touchdown_angle(self, x_dot: float) -> float:
+        """``θ_td = asin(x_f / l0)`` (rad from vertical, foot ahead of the hip)."""
+        return touchdown_angle_law(self, x_dot)
+
+    def existence_note(self) -> str | None:
+        """What sets the gait (added to a failed search)."""
+        return (
+            f"Raibert hopper: the thrust's ½ k δ² = {0.5 * self.stiffness * self.thrust**2:.3g} J "
+            f"a hop must balance the leg's loss and the foot placement must stay within "
+            f"{_MAX_REACH:g}·l0 of the hip ({_RAIBERT})"
+        )
+
+    def default_start(self) -> dict[str, float]:
+        """Near the gait at the defaults: a 0.1 m hop above the touchdown height at ẋ_d."""
+        return {
+            "z": self.rest_length + 0.1,
+            "phi": 0.0,
+            "x_dot": self.desired_speed,
+            "phi_dot": 0.0,
+        }
+
+    def nominal_input(self) -> np.ndarray:
+        """No per-step input: the controller is in the dynamics."""
+        return np.zeros(0)
