@@ -348,8 +348,8 @@ def _model_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print one JSON object")
 
 
-def _solve_arguments(parser: argparse.ArgumentParser) -> None:
-    _model_arguments(parser)
+def _gait_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--guess`` and ``--steps``: which gait to find (shared by ``solve`` and ``continue``)."""
     parser.add_argument(
         "--guess",
         action="append",
@@ -363,6 +363,11 @@ def _solve_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="K",
         help="returns to the section per orbit (2: a period-2 gait; default 1)",
     )
+
+
+def _solve_arguments(parser: argparse.ArgumentParser) -> None:
+    _model_arguments(parser)
+    _gait_arguments(parser)
     parser.add_argument(
         "--method",
         choices=("newton", "ipopt"),
@@ -764,19 +769,7 @@ def _continue_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--to", required=True, metavar="VALUE", help="parameter value to continue to"
     )
-    parser.add_argument(
-        "--guess",
-        action="append",
-        metavar="STATE=VALUE",
-        help="guess of the starting gait's section coordinates (repeatable)",
-    )
-    parser.add_argument(
-        "--steps",
-        type=_count(1),
-        default=1,
-        metavar="K",
-        help="period of the starting gait in steps (default 1)",
-    )
+    _gait_arguments(parser)
     parser.add_argument(
         "--both", action="store_true", help="also continue away from --to, to the range's end"
     )
