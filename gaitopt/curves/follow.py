@@ -1,0 +1,613 @@
+"""Pseudo-arclength continuation of a special point in two parameters.
+
+The curve is followed in ``y = (w, ℓ₁, ℓ₂)`` (see :mod:`gaitopt.curves.system`): predict along the
+tangent ``t`` (null vector of ``∂H/∂y``), correct with Newton on ``H(y) = 0, ⟨t, y − y_pred⟩_W
+= 0`` (Keller's pseudo-arclength method; Allgower & Georg, "Numerical Continuation Methods",
+§2.1), the inner product weighting the ``N`` shooting unknowns by ``1/N`` as in
+:mod:`gaitopt.continuation`; the step adapts to the corrector's work.  Every accepted point is
+certified like a solved gait (:func:`gaitopt.shooting.certify`: the orbit's physical checks on
+dense samples and an independent simulation) and its discretisation error estimated (the mesh is
+refined when it exceeds the tolerance).  The curve ends exactly on the target of the second
+parameter (the last point is corrected at that value, not overshot), where the gait stops
+existing on it (a ``boundary``, located by bisection), or where the corrector cannot continue.
+Codimension-two points between consecutive points (:mod:`gaitopt.curves.codim2`) are located by
+regula falsi (Illinois) on the arclength.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from ..continuation import PseudoArclength, SpecialPoint, continuation
+from ..errors import GaitoptInputError, ParameterError
+from ..hybrid import HybridModel
+from ..result import LimitCycle
+from ..shooting import MultipleShooting, Transcription, certify, transcription
+from ..stability import section_jacobians
+from . import codim2
+from .result import Curve, CurvePoint
+from .system import (
+    BOUNDARY_QUANTITIES,
+    CURVE_KINDS,
+    AugmentedSystem,
+    Parametrisation,
+    ParameterPath,
+    augmented_system,
+    bordering,
+    singular_matrix,
+)
+
+__all__ = ["bifurcation_curve", "curve_from"]
+
+_LOCATE_TOL = 1e-10  # parameter accuracy of located points (absolute)
+_MAX_MESH_REFINEMENTS = 3
+
+
+def bifurcation_curve(
+    model: HybridModel,
+    kind: str,
+    param: str,
+    param2: str | ParameterPath,
+    *,
+    to: float,
+    param_to: float | None = None,
+    start: SpecialPoint | Mapping[str, float] | LimitCycle | None = None,
+    steps: int = 1,
+    at: Sequence[float] = (),
+    bounds: tuple[float, float] | None = None,
+    options: PseudoArclength = PseudoArclength(step=0.05, max_step=0.2),
+    branch_options: PseudoArclength = PseudoArclength(),
+    verify: bool = True,
+    tol: float = 1e-10,
+) -> Curve:
+    """Follow a period doubling, fold, Neimark–Sacker point or existence boundary of a gait
+    through two parameters.
+
+    The first special point of ``kind`` on the gait's branch in ``param`` (continued from the
+    model's parameters towards ``param_to``, :func:`gaitopt.continuation`) is followed in
+    ``(param, param2)`` until ``param2`` reaches ``to`` exactly, or the curve ends.
+
+    Parameters
+    ----------
+    model : HybridModel
+        The model; its parameters are the start of the one-parameter search.
+    kind : {"PD", "LP", "NS", "boundary"}
+        The special point to follow.
+    param : str
+        The model parameter of the one-parameter search, and the curve's first parameter.
+    param2 : str or ParameterPath
+        The second parameter: a model parameter, or a path that sets several (e.g. the compass
+        gait's leg-mass position ``a`` with ``b = 1 − a``).
+    to : float
+        Value of ``param2`` where the curve ends (in the units of ``param2``).
+    param_to : float, optional
+        End of the one-parameter search in ``param`` (default: the end of its valid range above
+        the model's value).
+    start : SpecialPoint, mapping or LimitCycle, optional
+        A special point of ``kind`` to start from (skips the search), or the gait (guess or
+        solved cycle) to start the search from.
+    steps : int
+        Period of the gait in steps.
+    at : sequence of float
+        Values of ``param2`` at which curve points are also located exactly (e.g. to compare
+        with a grid).
+    bounds : (float, float), optional
+        Interval of ``param`` the curve stays in (default its valid range).
+    options : PseudoArclength
+        Step control along the curve.
+    branch_options : PseudoArclength
+        Step control of the one-parameter search.
+    verify : bool
+        Verify every point by independent simulation.
+    tol : float
+        Residual, discretisation-error and location tolerance.
+
+    Returns
+    -------
+    Curve
+        ``success`` False with a message when there is no special point of ``kind`` to start from.
+
+    Raises
+    ------
+    GaitoptInputError
+        Unknown ``kind`` or parameters, ``to`` out of ``param2``'s range or equal to its start.
+    """
+    if kind not in CURVE_KINDS:
+        raise GaitoptInputError(f"`kind` must be one of {', '.join(CURVE_KINDS)}, got {kind!r}")
+    path1 = ParameterPath.of(model, param)
+    path2 = param2 if isinstance(param2, ParameterPath) else ParameterPath.of(model, param2)
+    if path2.name == path1.name or set(path1.parameters) & set(path2.parameters):
+        raise GaitoptInputError(
+            f"`param2` = {path2.name!r} must differ from `param` = {param!r}; choose another "
+            f"second parameter"
+        )
+    to = float(to)
+    q0 = path2.value_of(model)
+    try:
+        model.replace(**path2.values(to))
+    except ParameterError as exc:
+        raise ParameterError(f"`to` = {to:g} for {path2.name}: {exc}") from None
+    if to == q0:
+        raise GaitoptInputError(
+            f"`to` = {to:g} equals the start value of `{path2.name}`; nothing to follow"
+        )
+    for value in at:
+        if not (min(q0, to) < float(value) < max(q0, to)):
+            raise GaitoptInputError(
+                f"`at` value {value!r} must lie strictly between {path2.name} = {q0:g} and "
+                f"`to` = {to:g}"
+            )
+    if isinstance(start, SpecialPoint):
+        if start.kind != kind:
+            raise GaitoptInputError(f"`start` is a {start.kind} point, not {kind}")
+        special, first = start, None
+    else:
+        branch = continuation(
+            model,
+            param,
+            to=param_to,
+            start=start,
+            steps=steps,
+            cascade=False,
+            options=branch_options,
+            verify=verify,
+            tol=tol,
+        )
+        curve = Curve(model, kind, (path1, path2), steps=steps)
+        if not branch.success:
+            curve.success, curve.message = False, branch.message
+            return curve
+        special = next((sp for sp in branch.special_points if sp.kind == kind), None)
+        first = branch.cycles[0]
+        if special is None:
+            curve.success = False
+            found = ", ".join(f"{sp.kind} at {sp.param:.8g}" for sp in branch.special_points)
+            curve.message = (
+                f"no {kind} point on the branch in {param} from {branch.params[0]:.6g} to "
+                f"{branch.params[-1]:.6g} ({branch.message}); special points found: "
+                f"{found or 'none'}"
+            )
+            return curve
+    return curve_from(
+        special, kind, (path1, path2), to, first=first, at=at, bounds=bounds, options=options,
+        verify=verify, tol=tol,
+    )  # fmt: skip
+
+
+def curve_from(
+    special: SpecialPoint,
+    kind: str,
+    paths: tuple[ParameterPath, ParameterPath],
+    to: float,
+    *,
+    first: LimitCycle | None = None,
+    at: Sequence[float] = (),
+    bounds: tuple[float, float] | None = None,
+    options: PseudoArclength = PseudoArclength(step=0.05, max_step=0.2),
+    verify: bool = True,
+    tol: float = 1e-10,
+) -> Curve:
+    """Follow the curve through a located special point (see :func:`bifurcation_curve`)."""
+    cycle = special.cycle
+    curve = Curve(
+        cycle.model if cycle is not None else None, kind, paths, start=special,
+        steps=cycle.steps if cycle is not None else 1,
+    )  # fmt: skip
+    if cycle is None or not cycle.success:
+        curve.success, curve.message = False, "the special point carries no certified gait"
+        return curve
+    boundary = None
+    if kind == "boundary":
+        boundary, why = _vanishing_quantity(cycle, first)
+        if boundary is None:
+            curve.success = False
+            curve.message = f"the boundary cannot be followed as a curve: {why}"
+            curve.condition = why
+            return curve
+        curve.condition = why
+    else:
+        curve.condition = {
+            "PD": "a multiplier at −1: det(A + I) = 0 (minimally augmented, bordered)",
+            "LP": "a multiplier at +1: det(A − I) = 0 (minimally augmented, bordered)",
+            "NS": "a pair with μᵢμⱼ = 1: det(A ⊙ A − I) = 0 (bialternate, bordered)",
+        }[kind]
+    follower = _Follower(cycle, kind, paths, boundary, to, at, bounds, options, verify, tol)
+    follower.run()
+    curve.cycles, curve.special_points = follower.cycles, follower.special_points
+    curve.message = follower.stop
+    curve.success = bool(follower.cycles)
+    return curve
+
+
+def _vanishing_quantity(cycle: LimitCycle, first: LimitCycle | None):
+    """Which check quantity vanishes at a boundary: the one smallest relative to its value at
+    the branch's first gait (or to its own size)."""
+    model = cycle.model
+    tr = transcription(type(model), cycle.discretisation, cycle.steps)
+    values = _check_quantities(cycle, tr)
+    reference = _check_quantities(first, tr) if first is not None else None
+    best, ratio_best = None, math.inf
+    for key, value in values.items():
+        ref = reference.get(key) if reference is not None else None
+        scale = abs(ref) if ref else max(abs(value), 1.0)
+        ratio = abs(value) / scale
+        if ratio < ratio_best:
+            best, ratio_best = key, ratio
+    if best is None or ratio_best > 1e-3:
+        return None, (
+            "no duration, guard rate or admissibility vanishes at it (the gait ends otherwise: "
+            "an interior grazing, a diverging period or a failed simulation), so no smooth "
+            "defining condition is known"
+        )
+    what, k = best
+    label = {
+        "duration": "a phase duration vanishes",
+        "grazing": "the impact grazes (the guard's rate at the phase end vanishes)",
+        "admissible": "the crossing becomes inadmissible (its admissibility function vanishes)",
+    }[what]
+    return best, f"{label}: {what} of phase {k} ({model.phases[tr.chain[k]].name}) = 0"
+
+
+def _check_quantities(cycle: LimitCycle, tr: Transcription) -> dict[tuple[str, int], float]:
+    w = _w_of(cycle, tr)
+    _, dg, adm, durations = (
+        np.asarray(v, dtype=float).ravel() for v in tr.checks(w, cycle.inputs, cycle.model.p)
+    )
+    out = {}
+    for k, i in enumerate(tr.chain):
+        transition = cycle.model.phases[i].transitions[0]
+        out[("duration", k)] = durations[k]
+        out[("grazing", k)] = dg[k]
+        if transition.admissible is not None:
+            out[("admissible", k)] = adm[k]
+    assert all(what in BOUNDARY_QUANTITIES for what, _ in out)
+    return out
+
+
+def _w_of(cycle: LimitCycle, tr: Transcription) -> np.ndarray:
+    """Shooting unknowns of a certified cycle: the segment starts interpolated in its dense
+    orbit (which samples them exactly)."""
+    S = tr.disc.segments
+    nodes = []
+    for arc in cycle.orbit:
+        tau = (arc.t - arc.t[0]) / (arc.t[-1] - arc.t[0])
+        nodes.append(np.array([np.interp(np.arange(S) / S, tau, row) for row in arc.x]))
+    return tr.pack(cycle.section_point, nodes, [float(d) for d in cycle.durations])
+
+
+def _doubled(disc: MultipleShooting) -> MultipleShooting:
+    return MultipleShooting(disc.segments, 2 * disc.steps, disc.dense)
+
+
+# ---------------------------------------------------------------------------------------------
+class _Follower:
+    """One curve from a located special point towards ``to``."""
+
+    def __init__(self, cycle, kind, paths, boundary, to, at, bounds, options, verify, tol):
+        self.kind, self.paths, self.boundary = kind, paths, boundary
+        self.options, self.verify, self.tol = options, verify, tol
+        self.par = Parametrisation.build(cycle.model, paths, cycle.inputs)
+        self.to = float(to)
+        self.dir2 = 1.0 if self.to > self.par.lam0[1] else -1.0
+        self.at = sorted(float(v) for v in at)
+        self.bounds = (-math.inf, math.inf) if bounds is None else tuple(map(float, bounds))
+        self.steps = cycle.steps
+        self.system = augmented_system(
+            type(cycle.model), cycle.discretisation, cycle.steps, kind, boundary
+        )
+        self.start_cycle = cycle
+        self.b, self.c = self._border(cycle.jacobian)
+        self.cycles: list[LimitCycle] = []
+        self.special_points: list[CurvePoint] = []
+        self.stop = ""
+
+    # -- the equations ---------------------------------------------------------------------
+    @property
+    def tr(self) -> Transcription:
+        return self.system.tr
+
+    def lam(self, y: np.ndarray) -> np.ndarray:
+        return y[-2:] * self.par.scale
+
+    def _border(self, A):
+        if self.kind == "boundary":
+            return np.zeros(1), np.zeros(1)
+        return bordering(self.kind, np.asarray(A, dtype=float))
+
+    def evaluate(self, y):
+        return self.system.evaluate(y, self.b, self.c, self.par)
+
+    def weights(self, y: np.ndarray) -> np.ndarray:
+        n = y.size - 2
+        return np.concatenate([np.full(n, 1.0 / n), [1.0, 1.0]])
+
+    def tangent(self, y: np.ndarray, previous: np.ndarray) -> np.ndarray:
+        _, J, _ = self.evaluate(y)
+        W = self.weights(y)
+        rhs = np.zeros(J.shape[0] + 1)
+        rhs[-1] = 1.0
+        t = np.linalg.solve(np.vstack([J, previous * W]), rhs)
+        t /= math.sqrt(float(t @ (W * t)))
+        return t if float(t @ (W * previous)) > 0 else -t
+
+    def correct(self, y_pred: np.ndarray, row: np.ndarray, target: float | None = None):
+        """Newton on ``H(y) = 0`` plus one scalar constraint: ``⟨row, y − y_pred⟩ = 0``
+        (pseudo-arclength, ``row = W t``) or, with ``target``, ``⟨row, y⟩ = target`` (a
+        parameter held fixed).  Returns ``(y, converged, iterations)``."""
+        y = y_pred.copy()
+        H, J, _ = self.evaluate(y)
+        for k in range(1, self.options.max_corrector + 1):
+            if not (np.all(np.isfinite(H)) and np.all(np.isfinite(J))):
+                return y, False, k
+            extra = float(row @ y) - target if target is not None else float(row @ (y - y_pred))
+            try:
+                dy = np.linalg.solve(np.vstack([J, row]), -np.concatenate([H, [extra]]))
+            except np.linalg.LinAlgError:
+                return y, False, k
+            y = y + dy
+            H, J, _ = self.evaluate(y)
+            small = np.max(np.abs(dy)) < 1e-9 * (1 + np.max(np.abs(y)))
+            if small and np.all(np.isfinite(H)) and np.max(np.abs(H)) <= self.tol:
+                return y, True, k
+        return y, False, self.options.max_corrector
+
+    def fix(self, which: int, value: float) -> tuple[np.ndarray, float]:
+        """The constraint row holding curve parameter ``which`` at ``value``."""
+        row = np.zeros(self.tr.size + 2)
+        row[self.tr.size + which] = 1.0
+        return row, value / self.par.scale[which]
+
+    # -- points ---------------------------------------------------------------------------
+    def multipliers_at(self, y: np.ndarray) -> np.ndarray:
+        _, _, A = self.evaluate(y)
+        return np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
+
+    def tests_at(self, y: np.ndarray, t: np.ndarray) -> dict[str, float]:
+        return codim2.tests(
+            self.kind, self.multipliers_at(y), t[-2:], (self.paths[0].name, self.paths[1].name)
+        )
+
+    def values(self, y: np.ndarray) -> dict[str, float]:
+        lam = self.lam(y)
+        return {self.paths[0].name: float(lam[0]), self.paths[1].name: float(lam[1])}
+
+    def certified(self, y: np.ndarray) -> tuple[LimitCycle | None, np.ndarray]:
+        """The gait at ``y`` (mesh refined while the discretisation error exceeds ``tol``) and
+        the possibly re-corrected ``y``; None where the parameters leave their range."""
+        lam = self.lam(y)
+        model = self.par.model_at(lam)
+        if model is None or not self.bounds[0] <= lam[0] <= self.bounds[1]:
+            return None, y
+        error = self._discretisation_error(y)
+        refinements = 0
+        while error > self.tol and refinements < _MAX_MESH_REFINEMENTS:
+            self.system = augmented_system(
+                type(model), _doubled(self.tr.disc), self.steps, self.kind, self.boundary
+            )
+            refinements += 1
+            y, ok, _ = self.correct(y, *self.fix(1, float(lam[1])))
+            if not ok:
+                return None, y
+            error = self._discretisation_error(y)
+        lam = self.lam(y)
+        model = self.par.model_at(lam)
+        if model is None:
+            return None, y
+        cycle = certify(
+            model, self.tr, y[:-2], self.par.u(lam), verify=self.verify, tol=self.tol,
+            discretisation_error=error,
+        )  # fmt: skip
+        return cycle, y
+
+    def _discretisation_error(self, y: np.ndarray) -> float:
+        """One Newton correction of the extended system towards twice the RK steps: the
+        shooting residual and the defining condition at the finer mesh (max over ``w`` and
+        both parameters, in their units)."""
+        lam = self.lam(y)
+        p, u = self.par.p(lam), self.par.u(lam)
+        fine = transcription(type(self.par.model), _doubled(self.tr.disc), self.steps)
+        F_fine = np.asarray(fine.residual(y[:-2], u, p), dtype=float).ravel()
+        H, J, _ = self.evaluate(y)
+        g_fine = self._condition(fine, y[:-2], u, p)
+        rhs = np.concatenate([F_fine, [g_fine - H[-1]], [0.0]])
+        row = np.zeros(y.size)
+        row[-1] = 1.0  # at fixed λ₂: how far the curve's λ₁ moves
+        try:
+            dy = np.linalg.solve(np.vstack([J, row]), rhs)
+        except np.linalg.LinAlgError:
+            return math.inf
+        return float(max(np.max(np.abs(dy[:-2])), np.max(np.abs(dy[-2:] * self.par.scale))))
+
+    def _condition(self, tr: Transcription, w, u, p) -> float:
+        """The defining condition ``g`` evaluated numerically with another transcription."""
+        if self.kind == "boundary":
+            what, k = self.boundary
+            _, dg, adm, durations = (np.asarray(v, dtype=float).ravel() for v in tr.checks(w, u, p))
+            return float({"duration": durations, "grazing": dg, "admissible": adm}[what][k])
+        J_w, J_u, _, _ = tr.linearisation(w, u, p)
+        A, _ = section_jacobians(np.asarray(J_w), np.asarray(J_u), tr.m, tr.n_g)
+        M = singular_matrix(self.kind, A)
+        n = M.shape[0]
+        K = np.block([[M, self.b[:, None]], [self.c[None, :], np.zeros((1, 1))]])
+        rhs = np.zeros(n + 1)
+        rhs[-1] = 1.0
+        return float(np.linalg.solve(K, rhs)[-1])
+
+    # -- the loop ----------------------------------------------------------------------------
+    def run(self) -> None:
+        opts = self.options
+        tr = self.tr
+        y = np.concatenate([_w_of(self.start_cycle, tr), self.par.lam0 / self.par.scale])
+        y, ok, _ = self.correct(y, *self.fix(1, float(self.par.lam0[1])))
+        if not ok:
+            self.stop = "the extended system does not converge at the start point"
+            return
+        cycle, y = self.certified(y)
+        if cycle is None or not cycle.success:
+            why = cycle.message if cycle is not None else "parameters out of range"
+            self.stop = f"the start point is not a certified gait: {why}"
+            return
+        self.cycles.append(cycle)
+        self.b, self.c = self._border(cycle.jacobian)
+        start = np.zeros_like(y)
+        start[-1] = self.dir2
+        t = self.tangent(y, start)
+        tests = self.tests_at(y, t)
+        h = opts.step
+        while len(self.cycles) < opts.max_points:
+            y_new, ok, iterations = self.correct(y + h * t, self.weights(y) * t)
+            target = None
+            if ok and (self.lam(y_new)[1] - self.to) * self.dir2 >= 0:
+                target = self.to
+            if ok:
+                for value in self.at:  # exact points requested on the way
+                    if (value - self.lam(y)[1]) * self.dir2 > 0 and (
+                        self.lam(y_new)[1] - value
+                    ) * self.dir2 > 0:
+                        self._insert_at(y, t, value)
+            if target is not None:
+                y_new, ok = self._land(y, t, target)
+            if not ok:
+                h /= 2
+                if h < opts.min_step:
+                    self.stop = (
+                        f"the corrector cannot continue the curve near {self._where(y)}"
+                    )
+                    return
+                continue
+            cycle, y_new = self.certified(y_new)
+            if cycle is None or not cycle.success:
+                if cycle is None and self.par.model_at(self.lam(y_new)) is None:
+                    self.stop = f"a parameter leaves its valid range near {self._where(y_new)}"
+                    return
+                if cycle is None and not self.bounds[0] <= self.lam(y_new)[0] <= self.bounds[1]:
+                    self.stop = f"{self.paths[0].name} leaves its bounds near {self._where(y_new)}"
+                    return
+                self._boundary(y, t, h if target is None else None, y_new, cycle)
+                return
+            t_new = self.tangent(y_new, t)
+            new_tests = self.tests_at(y_new, t_new)
+            self._codim2_between(y, t, y_new, tests, new_tests)
+            self.cycles.append(cycle)
+            self.b, self.c = self._border(cycle.jacobian)
+            if target is not None:
+                self.stop = f"reached {self.paths[1].name} = {self.to:.10g}"
+                return
+            y, t, tests = y_new, t_new, new_tests
+            h = min(opts.max_step, h * 1.5) if iterations <= 3 else h / 2 if iterations >= 6 else h
+        self.stop = f"stopped after {opts.max_points} points"
+
+    def _where(self, y: np.ndarray) -> str:
+        return ", ".join(f"{k} = {v:.8g}" for k, v in self.values(y).items())
+
+    def _land(self, y, t, value) -> tuple[np.ndarray, bool]:
+        """Correct at exactly ``λ₂ = value`` from a predictor along the tangent."""
+        dl = value / self.par.scale[1] - y[-1]
+        y_pred = y + t * (dl / t[-1]) if abs(t[-1]) > 1e-12 else y.copy()
+        y_pred[-1] = value / self.par.scale[1]
+        y_new, ok, _ = self.correct(y_pred, *self.fix(1, value))
+        return y_new, ok
+
+    def _insert_at(self, y, t, value) -> None:
+        y_at, ok = self._land(y, t, value)
+        if not ok:
+            return
+        cycle, _ = self.certified(y_at)
+        if cycle is not None and cycle.success:
+            self.cycles.append(cycle)
+
+    # -- codimension two ---------------------------------------------------------------------
+    def _codim2_between(self, y, t, y_new, tests, new_tests) -> None:
+        W = self.weights(y)
+        h_total = math.sqrt(float((y_new - y) @ (W * (y_new - y))))
+        if h_total == 0:
+            return
+        chord = (y_new - y) / h_total
+        found = []
+        for label, a in tests.items():
+            b = new_tests.get(label)
+            if b is None or a == 0 or b == 0 or np.sign(a) == np.sign(b):
+                continue
+            point = self._locate(y, chord, t, h_total, label, a, b)
+            if point is not None:
+                found.append(point)
+        found.sort(key=lambda sp: sp[0])
+        self.special_points.extend(sp for _, sp in found)
+
+    def _locate(self, y, chord, t, h_b, label, f_a, f_b):
+        """Illinois regula falsi on the chord's arclength for a test function's zero, until the
+        bracket is below 1e-10 in both parameters."""
+        lo, hi, f_lo, f_hi = 0.0, h_b, f_a, f_b
+        lam_lo, lam_hi = self.lam(y), None
+        side, y_mid, t_mid = 0, y, t
+        row = self.weights(y) * chord
+        for _ in range(60):
+            h = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+            if not lo < h < hi:
+                h = 0.5 * (lo + hi)
+            y_mid, ok, _ = self.correct(y + h * chord, row)
+            if not ok:
+                return None
+            t_mid = self.tangent(y_mid, t)
+            f = self.tests_at(y_mid, t_mid)[label]
+            if f == 0:
+                break
+            if np.sign(f) == np.sign(f_lo):
+                lo, f_lo, lam_lo = h, f, self.lam(y_mid)
+                if side == -1:
+                    f_hi /= 2
+                side = -1
+            else:
+                hi, f_hi, lam_hi = h, f, self.lam(y_mid)
+                if side == 1:
+                    f_lo /= 2
+                side = 1
+            if lam_hi is not None and np.max(np.abs(lam_hi - lam_lo)) < _LOCATE_TOL:
+                break
+        mu = self.multipliers_at(y_mid)
+        if not codim2.is_genuine(label, mu, self.kind):
+            return None
+        cycle, _ = self.certified(y_mid)
+        kind = label
+        message = codim2.DESCRIPTIONS[label.split(":")[0]]
+        if label.startswith("fold:"):
+            message = f"the curve turns back in {label[5:]} (d{label[5:]}/ds = 0)"
+        if cycle is None or not cycle.success:
+            message += "; the gait there could not be certified"
+        point = CurvePoint(kind, self.values(y_mid), len(self.cycles) - 1, cycle, message)
+        return h, point
+
+    def _boundary(self, y, t, h_fail, y_fail, failed) -> None:
+        """Bisect between the last certified point and the failure; the curve ends there."""
+        reason = failed.message if failed is not None else "the corrector cannot continue"
+        last = self.cycles[-1]
+        if h_fail is None:  # the failure was the landing point: bisect along the chord
+            W = self.weights(y)
+            h_fail = math.sqrt(float((y_fail - y) @ (W * (y_fail - y))))
+            t = (y_fail - y) / h_fail if h_fail > 0 else t
+        lo, hi = 0.0, h_fail
+        row = self.weights(y) * t
+        lam_lo, lam_hi = self.lam(y), self.lam(y_fail)
+        y_last = y
+        while hi - lo > 1e-14 and np.max(np.abs(lam_hi - lam_lo)) >= _LOCATE_TOL:
+            h = 0.5 * (lo + hi)
+            y_mid, ok, _ = self.correct(y + h * t, row)
+            cycle, y_mid = self.certified(y_mid) if ok else (None, y_mid)
+            if cycle is not None and cycle.success:
+                lo, last, lam_lo, y_last = h, cycle, self.lam(y_mid), y_mid
+            else:
+                hi, lam_hi = h, self.lam(y_mid)
+                if cycle is not None:
+                    reason = cycle.message
+        if last is not self.cycles[-1]:
+            self.cycles.append(last)
+        self.special_points.append(
+            CurvePoint(
+                "boundary", self.values(y_last), len(self.cycles) - 1, last,
+                f"the gait stops existing on the curve: {reason}",
+            )
+        )  # fmt: skip
+        self.stop = f"boundary at {self._where(y_last)}"
