@@ -10,6 +10,7 @@ systems — multiple shooting with CasADi, Floquet multipliers, return maps, sim
 from __future__ import annotations
 
 from .continuation import Branch, PseudoArclength, SpecialPoint, continuation
+from .curves import Curve, ParameterPath, bifurcation_curve
 from .errors import GaitoptInputError, GuessError, ParameterError, StateError, UnknownModelError
 from .hybrid import HybridModel, Phase, Section, Transition
 from .models import REGISTRY, model
@@ -22,6 +23,9 @@ __all__ = [
     "REGISTRY",
     "find_limit_cycle",
     "continuation",
+    "bifurcation_curve",
+    "Curve",
+    "ParameterPath",
     "PseudoArclength",
     "Branch",
     "SpecialPoint",
