@@ -24,7 +24,7 @@ import numpy as np
 from .errors import StateError
 from .parameters import ParameterSpec, check_parameter, parameter_specs
 
-__all__ = ["Transition", "Phase", "Section", "HybridModel", "Symbols"]
+__all__ = ["Transition", "Constraint", "Phase", "Section", "HybridModel", "Symbols"]
 
 
 @dataclass(frozen=True)
@@ -52,6 +52,10 @@ class Transition:
         for drawing successive steps; ``None`` if the contact does not move.
     doc : str
         The guard and reset equations, with their source.
+    returns_to_section : bool
+        Whether this transition, too, ends a step on the Poincaré section (``transitions[0]`` of
+        the last phase always does).  The rimless wheel's backward step: the chapter's return map
+        counts every impact, rocking back as well as vaulting forward.  Default ``False``.
     """
 
     name: str
@@ -63,11 +67,68 @@ class Transition:
     impact: bool = True
     foothold: str | None = None
     doc: str = ""
+    returns_to_section: bool = False
 
     @property
     def terminal(self) -> bool:
         """Whether the motion ends here (a fall)."""
         return self.reset is None
+
+
+@dataclass(frozen=True)
+class Constraint:
+    """A unilateral condition ``c(x, u, p) ≥ 0`` the physics needs throughout a phase.
+
+    A gait must satisfy every constraint its model declares: a swing foot above the ground, a
+    trailing foot that lifts off after heel strike, a leg that pushes rather than pulls, a ball
+    above its paddle.  The checks are made three times, independently: by
+    :func:`gaitopt.shooting.certify` on the orbit's dense samples, by the verification simulation
+    (where ``c`` falling through zero ends the motion as the event :attr:`outcome`), and so by
+    continuation, which reports a ``boundary`` special point where a constraint becomes active.
+
+    Attributes
+    ----------
+    name : str
+        The condition in words (``"swing foot above the slope"``).
+    function : casadi.Function
+        ``c(x, u, p) -> scalar`` in a stated unit; the condition is ``c ≥ 0``.
+    outcome : str
+        The event that a violation is (``"trip"``, ``"leg pulls"``): the name of the terminal
+        event in a simulation and of the failure in a message.
+    at_start : bool
+        ``c = 0`` where the phase begins, by construction (a trailing foot that starts on the
+        ground): then ``c`` must rise at once, ``ċ = ∇c · f > 0`` at the start (the foot lifts
+        off), and be positive after it.
+    at_end : bool
+        ``c = 0`` where the phase ends, by construction (a foot that touches down at the guard).
+    unit : str
+        Unit of ``c`` (``"m"``, ``"N"``).
+    source : str
+        Where the condition comes from.
+    """
+
+    name: str
+    function: ca.Function
+    outcome: str
+    at_start: bool = False
+    at_end: bool = False
+    unit: str = ""
+    source: str = ""
+
+
+_RATES: dict[tuple[int, int], tuple[ca.Function, ca.Function, ca.Function]] = {}
+
+
+def rate_along(flow: ca.Function, g: ca.Function) -> ca.Function:
+    """``ġ(x, u, p) = ∇g(x) · f(x, u, p)``: the rate of change of ``g`` along the flow ``f``
+    (built once per pair of functions)."""
+    key = (id(flow), id(g))
+    if key not in _RATES:
+        x, u, p = (ca.SX.sym(n, flow.size1_in(i)) for i, n in enumerate(("x", "u", "p")))
+        rate = ca.jtimes(g(x, u, p), x, flow(x, u, p))
+        # Keep flow and g alive with their rate, so that their ids stay theirs.
+        _RATES[key] = (ca.Function("rate", [x, u, p], [rate], ["x", "u", "p"], ["rate"]), flow, g)
+    return _RATES[key][0]
 
 
 @dataclass(frozen=True)
@@ -95,6 +156,10 @@ class Phase:
     bodies : casadi.Function or None
         ``bodies(x, p) -> (m, r, v)``: point masses (K×1, kg), positions and velocities (2×K,
         world frame, relative to the contact point); for momentum and energy checks.
+    constraints : tuple of Constraint
+        The unilateral conditions the physics needs in this phase (see :class:`Constraint`).
+        A model that ignores one by convention says so in its docstring (the compass gait's
+        mid-swing scuff).
     """
 
     name: str
@@ -105,6 +170,7 @@ class Phase:
     points: ca.Function | None = None
     point_names: tuple[str, ...] = ()
     bodies: ca.Function | None = None
+    constraints: tuple[Constraint, ...] = ()
 
     @property
     def n(self) -> int:
@@ -176,6 +242,12 @@ class Symbols:
         """``name(x, u, p) -> expr``."""
         return ca.Function(name, [x, self.u, self.p], [ca.SX(expr)], ["x", "u", "p"], [name])
 
+    def constraint(
+        self, name: str, x: ca.SX, expr: Any, outcome: str, **options: Any
+    ) -> Constraint:
+        """The unilateral condition ``expr ≥ 0`` (see :class:`Constraint` for ``options``)."""
+        return Constraint(name, self.function("constraint", x, expr), outcome, **options)
+
     def conserved(self, name: str, x: ca.SX, expr: Any) -> ca.Function:
         """``name(x, p) -> expr`` (no input: conserved only along the passive flow)."""
         return ca.Function(name, [x, self.p], [ca.SX(expr)], ["x", "p"], [name])
@@ -206,8 +278,19 @@ class HybridModel:
     reference: ClassVar[str] = ""
     inputs: ClassVar[tuple[str, ...]] = ()
     input_units: ClassVar[tuple[str, ...]] = ()
+    #: Unit of each state, by name (``{"theta": "rad", "theta_dot": "rad/s"}``), for axis labels;
+    #: a state not listed is labelled without a unit guess (figures then say "unit not declared").
+    state_units: ClassVar[dict[str, str]] = {}
+    #: Unit of the model's time (``"s"``; ``"1"`` for dimensionless time).
+    time_unit: ClassVar[str] = "s"
     #: Default shooting mesh (segments per phase, RK steps per segment); refined automatically.
     mesh: ClassVar[tuple[int, int]] = (4, 3)
+    #: Whether the model can have a passive gait (with its :meth:`nominal_input`) for
+    #: :func:`~gaitopt.shooting.find_limit_cycle` to look for.  False for an actuated-only
+    #: model (the five-link biped: its impacts dissipate energy that only its torques supply),
+    #: whose gaits come from optimisation: ``make gaits`` and the tests' passive-gait fixtures
+    #: skip the passive search for it, saying why (:meth:`existence_note`).
+    passive_gait: ClassVar[bool] = True
     _cache: ClassVar[dict[type, _Structure]] = {}
 
     def __post_init__(self) -> None:
@@ -237,6 +320,15 @@ class HybridModel:
     def existence_note(self) -> str | None:
         """What closed-form theory says about the main gait's existence at these parameters, if
         anything is known (added to a failed search's message; never used to decide)."""
+        return None
+
+    def input_rates(self, phase: int) -> ca.Function | None:
+        """The rates the inputs do work on in ``phase``, for the positive-work cost of
+        :func:`gaitopt.optimize_gait`: ``rates(x, p) -> ω`` with one entry per input (rad/s for a
+        torque, m/s for a force) such that input ``i`` delivers the power ``uᵢ ωᵢ`` (W) — for a
+        joint torque, the relative rate of the two bodies it acts between.  ``None`` (the
+        default): the model does not declare them, and work-based costs are unavailable."""
+        del phase
         return None
 
     # -- derived -----------------------------------------------------------------------------

@@ -29,6 +29,9 @@ __all__ = [
     "constrained_impact_velocity",
     "mass_matrix",
     "bodies_function",
+    "rigid_link",
+    "lagrange_terms",
+    "contact_force",
 ]
 
 PointMass = tuple[ca.SX, ca.SX]
@@ -66,6 +69,18 @@ def lagrange_acceleration(
     ``M q̈ = τ − Σ m_i J_iᵀ (J̇_i q̇ + g e_y)`` with ``M = Σ m_i J_iᵀ J_i``.  This form gives far
     smaller expressions than differentiating ``T`` twice.
     """
+    M, rhs = lagrange_terms(masses, q, qd, gravity, tau)
+    return ca.cse(solve_small(M, rhs))
+
+
+def lagrange_terms(
+    masses: Sequence[PointMass], q: ca.SX, qd: ca.SX, gravity: ca.SX, tau: ca.SX | float = 0
+) -> tuple[ca.SX, ca.SX]:
+    """Lagrange's equations as ``M(q) q̈ = rhs(q, q̇, τ)`` (the implicit form, for collocation
+    or to check ``M``); :func:`lagrange_acceleration` solves it.
+
+    ``M = Σ m_i J_iᵀ J_i`` and ``rhs = τ − Σ m_i J_iᵀ (J̇_i q̇ + g e_y)`` with ``J_i = ∂r_i/∂q``.
+    """
     M = 0
     rhs = tau
     for m, r in masses:
@@ -74,7 +89,36 @@ def lagrange_acceleration(
         bias = ca.jtimes(v, q, qd) + ca.vertcat(0, gravity)  # J̇ q̇ + g e_y
         M = M + m * (J.T @ J)
         rhs = rhs - m * (J.T @ bias)
-    return ca.cse(solve_small(M, rhs))
+    return M, rhs
+
+
+def rigid_link(mass: ca.SX, com: ca.SX, axis: ca.SX, inertia: ca.SX) -> list[PointMass]:
+    """A planar rigid body as two point masses with the same dynamics (an equimomental system).
+
+    Masses ``m/2`` at ``com ± √(I/m)·axis``: the same total mass, centre of mass and moment of
+    inertia about it (``2·(m/2)·(I/m) = I``), so the same kinetic energy ``½ m |v_G|² + ½ I θ̇²``,
+    potential energy and angular momentum about any point as the body (Routh 1905, "Elementary
+    rigid dynamics", equimomental systems).  Every function of this module therefore treats
+    rigid links exactly, with no change.
+
+    Parameters
+    ----------
+    mass : casadi.SX
+        Body mass ``m`` (kg), positive.
+    com : casadi.SX
+        Centre of mass (2-vector expression of ``q``, m).
+    axis : casadi.SX
+        A unit vector fixed in the body (expression of ``q``), e.g. along the link.
+    inertia : casadi.SX
+        Moment of inertia about the centre of mass ``I`` (kg·m²), non-negative.
+
+    Returns
+    -------
+    list of PointMass
+        The two point masses.
+    """
+    arm = ca.sqrt(inertia / mass) * axis
+    return [(mass / 2, com + arm), (mass / 2, com - arm)]
 
 
 def solve_small(A: ca.SX, b: ca.SX) -> ca.SX:
@@ -210,3 +254,20 @@ def bodies_function(
     r = ca.horzcat(*[ri for _, ri in masses])
     v = ca.horzcat(*[_velocity(ri, q, qd) for _, ri in masses])
     return ca.Function("bodies", [x, p], [m, r, v], ["x", "p"], ["m", "r", "v"])
+
+
+def contact_force(
+    masses: Sequence[PointMass], q: ca.SX, qd: ca.SX, qdd: ca.SX, gravity: ca.SX
+) -> ca.SX:
+    """The force the ground exerts on a system with one contact (N, 2-vector, world frame).
+
+    Newton's second law for the whole system: ``F = Σ m_i (r̈_i + g ŷ)`` with
+    ``r̈_i = J_i q̈ + J̇_i q̇`` (positions in an inertial frame; gravity along −y).  Its component
+    along the ground's normal must be ≥ 0: the leg pushes, it cannot pull.
+    """
+    total = ca.SX.zeros(2, 1)
+    for m, r in masses:
+        v = _velocity(r, q, qd)
+        a = ca.jtimes(v, q, qd) + ca.jtimes(v, qd, qdd)
+        total += m * (a + ca.vertcat(0, gravity))
+    return total

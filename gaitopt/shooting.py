@@ -27,7 +27,7 @@ import casadi as ca
 import numpy as np
 
 from .errors import GaitoptInputError, GuessError
-from .hybrid import HybridModel
+from .hybrid import HybridModel, rate_along
 from .integrators import segment_function, segment_trajectory_function
 from .result import LimitCycle, OrbitArc
 from .simulation import Simulation, simulate
@@ -231,6 +231,16 @@ class Transcription:
         ]
 
     @cached_property
+    def constraint_maps(self) -> list[list[tuple[ca.Function, ca.Function]]]:
+        """Each phase's unilateral constraints ``c`` mapped over its dense samples, with their
+        rates ``ċ = ∇c · f`` (for a constraint that starts active: the foot must lift off)."""
+        K = self.disc.segments * self.disc.dense + 1
+        return [
+            [(c.function.map(K), rate_along(phase.flow, c.function)) for c in phase.constraints]
+            for phase in self.phases
+        ]
+
+    @cached_property
     def _ipopt_solver(self) -> ca.Function:
         nlp = {"x": self._w, "p": ca.vertcat(self._u, self._p), "f": 0, "g": self._F}
         options = {
@@ -268,10 +278,7 @@ class Transcription:
 
 def _guard_rate(phase, transition) -> ca.Function:
     """``ġ(x, u, p) = ∇g(x) · f(x)``: the guard's rate of change along the flow."""
-    f = phase.flow
-    x, u, p = (ca.SX.sym(n, f.size1_in(i)) for i, n in enumerate(("x", "u", "p")))
-    rate = ca.jtimes(transition.guard(x, u, p), x, f(x, u, p))
-    return ca.Function("guard_rate", [x, u, p], [rate])
+    return rate_along(phase.flow, transition.guard)
 
 
 @lru_cache(maxsize=64)
@@ -382,6 +389,7 @@ def find_limit_cycle(
             max_phase_time=_time_limit(model),
             rtol=1e-8,
             atol=1e-9,  # a guess: Newton does the rest
+            constraints=False,  # checked on the orbit found (certify), not on the guess
         )
         if not sim.success:
             where = ", ".join(
@@ -510,6 +518,8 @@ def certify(
     orbit = _orbit_arcs(model, tr, w, u, p, durations)
     if problem is None:
         problem = _check_dense(model, tr, orbit, u, p)
+    if problem is None:
+        problem = check_constraints(model, tr, orbit, u, p)
     if problem is None and steps > 1:
         problem = _check_minimal_period(model, tr, w, steps)
     if problem is not None:
@@ -706,6 +716,48 @@ def _check_dense(model, tr, orbit, u, p) -> str | None:
                         f"{_phase_label(model, tr, k)} at t = {t:.4g} s, before the phase ends "
                         f"(e.g. a foot through the ground); not a gait with this phase sequence"
                     )
+    return None
+
+
+#: A unilateral constraint counts as violated where ``c < -_CONSTRAINT_TOL · (1 + max |c|)`` on
+#: the dense samples (the shooting solution's own accuracy is ~1e-10), and a constraint that
+#: starts active must rise faster than ``_CONSTRAINT_TOL`` per second (in its unit).
+_CONSTRAINT_TOL = 1e-9
+
+
+def check_constraints(model, tr, orbit, u, p) -> str | None:
+    """Every unilateral constraint of every phase holds on the orbit's dense samples.
+
+    A constraint declared ``at_start`` (zero where the phase begins: a trailing foot on the
+    ground) must also rise there, ``ċ > 0`` (the foot lifts off); one declared ``at_end`` is zero
+    at the phase's last sample by construction.  Returns the first violation in words, or None.
+    """
+    for k, arc in enumerate(orbit):
+        phase = model.phases[arc.phase]
+        for constraint, (c_map, rate) in zip(
+            phase.constraints, tr.constraint_maps[arc.phase], strict=True
+        ):
+            c = np.asarray(c_map(arc.x, u, p), dtype=float).ravel()
+            scale = _CONSTRAINT_TOL * (1 + float(np.max(np.abs(c))))
+            unit = f" {constraint.unit}" if constraint.unit else ""
+            label = _phase_label(model, tr, k)
+            if constraint.at_start:
+                c0_rate = float(rate(arc.x[:, 0], u, p))
+                if not c0_rate > _CONSTRAINT_TOL:
+                    return (
+                        f"no gait: {constraint.outcome} at the start of {label}: "
+                        f"'{constraint.name}' starts at 0 and must rise, but its rate is "
+                        f"{c0_rate:.3g}{unit}/s ({constraint.source})"
+                    )
+            inner = slice(1 if constraint.at_start else 0, -1 if constraint.at_end else None)
+            bad = np.nonzero(c[inner] < -scale)[0]
+            if bad.size:
+                j = int(bad[0]) + (1 if constraint.at_start else 0)
+                return (
+                    f"no gait: {constraint.outcome} in {label} at t = {arc.t[j]:.4g} s: "
+                    f"'{constraint.name}' fails (value {c[j]:.3g}{unit}, lowest "
+                    f"{float(np.min(c[inner])):.3g}{unit}; {constraint.source})"
+                )
     return None
 
 

@@ -27,7 +27,7 @@ from scipy.integrate import DOP853, LSODA, RK45, OdeSolution, Radau
 from scipy.optimize import brentq
 
 from .errors import GaitoptInputError
-from .hybrid import HybridModel, Phase
+from .hybrid import HybridModel, Phase, rate_along
 
 __all__ = ["simulate", "Simulation", "Arc", "Event"]
 
@@ -100,8 +100,10 @@ class Simulation:
     success : bool
         Whether the requested number of steps was completed.
     status : str
-        ``"completed"``, ``"fell"`` (a terminal transition), ``"timeout"`` (no transition within
-        ``max_phase_time``) or ``"failed"`` (the integrator failed).
+        ``"completed"``, ``"fell"`` (a terminal transition), ``"standing"`` (impacts
+        accumulate, Zeno: the motion comes to rest in finite time, see :func:`_accumulation`),
+        ``"timeout"`` (no transition within ``max_phase_time``) or ``"failed"`` (the integrator
+        failed).
     message : str
         What happened, in words.
     arcs : list of Arc
@@ -114,6 +116,9 @@ class Simulation:
         Phase-0 states at those returns (rows).
     step_parameters : list of dict
         With a ``terrain``: the parameters it changed for each step begun (step k from return k).
+    accumulation_time : float or None
+        With ``status == "standing"``: the time (s) at which the accumulating impacts end,
+        extrapolated from their geometric intervals.
     """
 
     success: bool
@@ -124,6 +129,7 @@ class Simulation:
     section_times: np.ndarray = field(default_factory=lambda: np.zeros(0))
     section_states: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     step_parameters: list[dict[str, float]] = field(default_factory=list)
+    accumulation_time: float | None = None
 
     @property
     def steps(self) -> int:
@@ -152,20 +158,37 @@ class _Buffered:
 
 
 class _PhaseFunctions:
-    """Numerical callables of one phase, for fixed ``u`` and ``p``."""
+    """Numerical callables of one phase, for fixed ``u`` and ``p``.
 
-    def __init__(self, phase: Phase, u: np.ndarray, p: np.ndarray):
+    Events are numbered: the phase's transitions first, then its unilateral constraints, each of
+    which is a terminal event where ``c`` falls through zero (a trip, a leg that pulls)."""
+
+    def __init__(self, phase: Phase, u: np.ndarray, p: np.ndarray, constraints: bool = True):
         self.phase = phase
         self.u, self.p = u, p
+        self.constraints = phase.constraints if constraints else ()
         self._flow = _Buffered(phase.flow, u, p)
         self._guards = [_Buffered(tr.guard, u, p) for tr in phase.transitions]
+        self._guards += [_Buffered(c.function, u, p) for c in self.constraints]
+        self._directions = [tr.direction for tr in phase.transitions]
+        self._directions += [-1] * len(self.constraints)
         self._admissible = [
             _Buffered(tr.admissible, u, p) if tr.admissible is not None else None
             for tr in phase.transitions
-        ]
+        ] + [None] * len(self.constraints)
         self._jac = None
 
+    @property
+    def events(self) -> int:
+        """Number of events (transitions and constraints)."""
+        return len(self._guards)
+
+    _drive = None  # (feedforward, section time, step) for a time-varying input
+
     def rhs(self, t: float, x: np.ndarray) -> np.ndarray:
+        if self._drive is not None:  # feedforward u(t − t_section, step) in the flow
+            feedforward, t_section, step = self._drive
+            self._flow._u[:] = feedforward(t - t_section, step)
         return self._flow(x)
 
     def jac(self, t: float, x: np.ndarray) -> np.ndarray:
@@ -174,11 +197,40 @@ class _PhaseFunctions:
         return np.asarray(self._jac(x, self.u, self.p))
 
     def signed_guard(self, k: int, x: np.ndarray) -> float:
-        return self.phase.transitions[k].direction * float(self._guards[k](x)[0])
+        return self._directions[k] * float(self._guards[k](x)[0])
 
     def admissible(self, k: int, x: np.ndarray) -> bool:
+        n_tr = len(self.phase.transitions)
+        if k >= n_tr and self.constraints[k - n_tr].at_end:
+            # A constraint that vanishes where the phase ends (a foot touching down) reaches 0
+            # with the cycle's guard: that is the touchdown, not a violation.
+            return abs(float(self._guards[0](x)[0])) > _CONSTRAINT_START
         a = self._admissible[k]
         return a is None or float(a(x)[0]) > 0
+
+    def violated_at_start(self, x: np.ndarray) -> tuple[int, str] | None:
+        """A constraint that fails where the phase begins: one that starts active (``at_start``)
+        and does not rise (a trailing foot that does not lift off), or one already negative."""
+        n_tr = len(self.phase.transitions)
+        for j, c in enumerate(self.constraints):
+            value = float(self._guards[n_tr + j](x)[0])
+            unit = f" {c.unit}" if c.unit else ""
+            if c.at_start:
+                rate = float(rate_along(self.phase.flow, c.function)(x, self.u, self.p))
+                if not rate > _CONSTRAINT_RATE:
+                    return (
+                        n_tr + j,
+                        f"'{c.name}' starts at 0 and does not rise (rate {rate:.3g}{unit}/s)",
+                    )
+            elif value < -_CONSTRAINT_START:
+                return n_tr + j, f"'{c.name}' fails at the start ({value:.3g}{unit})"
+        return None
+
+
+# A constraint that starts active must rise faster than this (its unit per second); one that does
+# not must not start below -_CONSTRAINT_START (its unit).  The shooting's certify uses the same.
+_CONSTRAINT_RATE = 1e-9
+_CONSTRAINT_START = 1e-9
 
 
 def simulate(
@@ -193,6 +245,8 @@ def simulate(
     atol: float = 1e-12,
     max_phase_time: float = 30.0,
     terrain: Terrain | None = None,
+    constraints: bool = True,
+    feedforward: Callable[[float, int], np.ndarray] | None = None,
 ) -> Simulation:
     """Simulate a hybrid model for a number of steps.
 
@@ -222,6 +276,16 @@ def simulate(
         at each return to the section, after the input policy, which does not see it): those
         parameters hold for that step, e.g. the SLIP's ``ground_height`` or a walker's ``slope``
         (unknown per-step ground changes).  Default: the model's parameters throughout.
+    constraints : bool
+        Whether the phases' unilateral constraints end the motion where they fail (a trip, a
+        leg that pulls: status ``"fell"``, the event named by the constraint's ``outcome``).
+        ``False`` only for a rough guess of an orbit, whose checks come later.
+    feedforward : callable, optional
+        ``feedforward(t, step) -> u``: an input that varies within a step, ``t`` the time since
+        the last return to the section (s) and ``step`` the number of returns so far; it drives
+        the flow and, at its time, the reset (an optimal gait's profile, held at its last value
+        if a step lasts longer).  It replaces ``inputs`` in the flow and the resets; guards and
+        constraints see the step's ``inputs``.
 
     Returns
     -------
@@ -262,7 +326,20 @@ def simulate(
         sec_x.append(x.copy())
     cycle_end = (len(model.phases) - 1, 0)  # (phase, transition) that closes a cycle
     while len(sec_t) - 1 < steps or (phase != 0 and steps > 0):
-        funcs = _PhaseFunctions(model.phases[phase], u, p)
+        funcs = _PhaseFunctions(model.phases[phase], u, p, constraints)
+        if feedforward is not None:  # the flow gets its own input buffer, rewritten per call
+            funcs._flow = _Buffered(model.phases[phase].flow, np.array(u, dtype=float), p)
+            funcs._drive = (feedforward, sec_t[-1] if sec_t else 0.0, max(len(sec_t) - 1, 0))
+        at_start = funcs.violated_at_start(x)
+        if at_start is not None:
+            constraint = model.phases[phase].constraints[at_start[0] - len(funcs.phase.transitions)]
+            sim.events.append(Event(t, phase, constraint.outcome, x.copy(), None))
+            sim.status = "fell"
+            sim.message = (
+                f"{constraint.outcome} at t = {t:.6g} s after {len(sec_t) - 1} steps: "
+                f"{at_start[1]} in phase '{model.phases[phase].name}'"
+            )
+            break
         arc, fired, x_minus, status = _integrate_phase(
             funcs, solver_cls, t, x, rtol, atol, max_phase_time, method
         )
@@ -277,15 +354,28 @@ def simulate(
                 else f"integrator failed in phase '{model.phases[phase].name}' at t = {t:.6g}"
             )
             break
+        if fired >= len(model.phases[phase].transitions):  # a unilateral constraint fails
+            constraint = model.phases[phase].constraints[
+                fired - len(model.phases[phase].transitions)
+            ]
+            sim.events.append(Event(t, phase, constraint.outcome, x_minus, None))
+            sim.status = "fell"
+            sim.message = (
+                f"{constraint.outcome} at t = {t:.6g} s after {len(sec_t) - 1} steps: "
+                f"'{constraint.name}' fails in phase '{model.phases[phase].name}'"
+            )
+            break
         tr = model.phases[phase].transitions[fired]
         if tr.terminal:
             sim.events.append(Event(t, phase, tr.name, x_minus, None))
             sim.status = "fell"
             sim.message = f"{tr.name} at t = {t:.6g} s after {len(sec_t) - 1} steps"
             break
+        if feedforward is not None:  # the reset sees the input at the event
+            u = np.asarray(feedforward(t - funcs._drive[1], funcs._drive[2]), dtype=float)
         x = np.asarray(tr.reset(x_minus, u, p), dtype=float).ravel()
         sim.events.append(Event(t, phase, tr.name, x_minus, x.copy()))
-        closes_cycle = (phase, fired) == cycle_end
+        closes_cycle = (phase, fired) == cycle_end or tr.returns_to_section
         phase = tr.target
         if closes_cycle:
             sec_t.append(t)
@@ -293,6 +383,16 @@ def simulate(
             if len(sec_t) - 1 < steps:
                 u = policy(len(sec_t) - 1, x)
                 p = parameters(len(sec_t) - 1)
+        zeno = _accumulation([e.t for e in sim.events if e.state_after is not None])
+        if zeno is not None and len(sec_t) - 1 < steps:
+            sim.status = "standing"
+            sim.accumulation_time = zeno[1]
+            sim.message = (
+                f"impacts accumulate (Zeno): their intervals shrink by ×{zeno[0]:.4g} each, so "
+                f"infinitely many occur before t = {zeno[1]:.6g} s, where the motion comes to "
+                f"rest (standing) after {len(sec_t) - 1} steps"
+            )
+            break
     sim.success = sim.status == "completed"
     if sim.success:
         sim.message = f"{len(sec_t) - 1} steps in {t:.6g} s"
@@ -300,6 +400,63 @@ def simulate(
     sim.section_states = np.array(sec_x) if sec_x else np.zeros((0, len(model.state_names)))
     sim.step_parameters = step_parameters
     return sim
+
+
+# -- accumulation of impacts (Zeno) ------------------------------------------------------------
+# A rimless wheel that rocks to rest strikes spoke after spoke with intervals shrinking by a
+# constant factor (cos 2α per impact pair, Tedrake's rocking branch): infinitely many impacts in
+# finite time.  Integration cannot follow it to the end (the excursions fall below the guards'
+# arming threshold and the wheel would sink through the ground), so the accumulation is detected
+# and the motion ends as "standing".  The test is generic, on event times only: the last
+# _ZENO_WINDOW intervals (between events, or between every second event for motions that
+# alternate between two contacts) shrink by a factor r < 1 that is constant to within
+# _ZENO_SPREAD·(1 − r) — a transient whose intervals converge to a positive period has ratios
+# tending to 1, with (1 − r) shrinking geometrically, and is not taken for one.
+_ZENO_WINDOW = 5
+_ZENO_SPREAD = 0.1
+
+
+def _accumulation(times: list[float]) -> tuple[float, float] | None:
+    """Geometric accumulation of event times: ``(ratio per event, accumulation time)`` or None.
+
+    For lag 1 and lag 2, the intervals ``dₖ = tₖ₊L − tₖ`` (every L-th) of the last events must all
+    shrink, with ratios ``rₖ = dₖ₊₁/dₖ`` within ``_ZENO_SPREAD·(1 − r̄)`` of their mean ``r̄ < 1``;
+    the accumulation time is then ``t_last + d_last · r̄/(1 − r̄)`` (the geometric series)."""
+    for lag in (1, 2):
+        needed = lag * (_ZENO_WINDOW + 1) + 1
+        if len(times) < needed:
+            return None
+        t = np.asarray(times[-needed:], dtype=float)[::-1][::lag][::-1]
+        d = np.diff(t)
+        if not np.all(d > 0):
+            continue
+        r = d[1:] / d[:-1]
+        mean = float(np.mean(r))
+        if mean < 1.0 and np.all(np.abs(r - mean) <= _ZENO_SPREAD * (1.0 - mean)):
+            return mean ** (1.0 / lag), float(t[-1] + d[-1] * mean / (1.0 - mean))
+    return None
+
+
+def _short_excursion(funcs: _PhaseFunctions, x0: np.ndarray, armed: np.ndarray) -> float | None:
+    """A step bound that lets the guard checks see a short excursion at the phase start.
+
+    A phase that starts on a guard (a rimless wheel rocking onto a spoke at a few mm/s) may leave
+    it to the armed side and come back within a fraction of one adaptive step: the checks at
+    the step's interior points would miss it, and the wheel would sink through the ground.  For
+    each transition that starts unarmed and moves to its armed side (signed rate ``ġ < 0``) with
+    a curvature that brings it back (``g̈ > 0``), the excursion lasts about ``τ = 2|ġ|/g̈``
+    (second-order Taylor); the returned bound ``τ/4`` holds until every guard is armed.  None if
+    no such excursion."""
+    bound = np.inf
+    for k, tr in enumerate(funcs.phase.transitions):
+        if armed[k]:
+            continue
+        rate = rate_along(funcs.phase.flow, tr.guard)
+        g1 = tr.direction * float(rate(x0, funcs.u, funcs.p))
+        g2 = tr.direction * float(rate_along(funcs.phase.flow, rate)(x0, funcs.u, funcs.p))
+        if g1 < 0 < g2:
+            bound = min(bound, 0.5 * abs(g1) / g2)
+    return float(bound) if np.isfinite(bound) and bound > 0 else None
 
 
 def _initial_state(model: HybridModel, x0, phase: int) -> np.ndarray:
@@ -341,9 +498,12 @@ def _integrate_phase(funcs: _PhaseFunctions, solver_cls, t0, x0, rtol, atol, max
     step's dense output."""
     kwargs = {"jac": funcs.jac} if method in ("Radau", "LSODA") else {}
     solver = solver_cls(funcs.rhs, t0, x0, t0 + max_time, rtol=rtol, atol=atol, **kwargs)
-    n_tr = len(funcs.phase.transitions)
+    n_tr = funcs.events
     values = np.array([funcs.signed_guard(k, x0) for k in range(n_tr)])
     armed = values < -_ARM
+    short = _short_excursion(funcs, x0, armed)
+    if short is not None:
+        solver.max_step = short
     ts = [t0]
     interpolants = []
     while True:
@@ -378,6 +538,8 @@ def _integrate_phase(funcs: _PhaseFunctions, solver_cls, t0, x0, rtol, atol, max
             armed[k] = was_armed
             values[k] = previous
         interpolants.append(dense)
+        if short is not None and np.all(armed[: len(funcs.phase.transitions)]):
+            solver.max_step, short = np.inf, None  # the short excursion is seen: full steps
         if best is not None:
             ts.append(best[0])
             return OdeSolution(ts, interpolants), best[1], best[2], None

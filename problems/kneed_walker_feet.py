@@ -234,8 +234,8 @@ def _release_check() -> ca.Function:
     u = ca.SX.sym("u", 0)
     p = ca.SX.sym("p", phase.flow.size1_in(2))
     f = phase.flow(x, u, p)
-    trip = next(tr for tr in phase.transitions if tr.name == "trip")
-    rise = ca.jtimes(trip.guard(x, u, p), x, f)
+    clearance = next(c for c in phase.constraints if c.outcome == "trip")
+    rise = ca.jtimes(clearance.function(x, u, p), x, f)
     return ca.Function("release", [x, p], [ca.vertcat(rise, f[5] - f[4])])
 
 

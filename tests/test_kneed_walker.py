@@ -317,12 +317,16 @@ def test_heel_strike_geometry_and_the_scuff_rule(gait):
 
 def test_swing_foot_clears_the_slope_until_the_knee_locks(gait):
     # The knee's purpose: the swing foot stays above the slope through the three-link phase (the
-    # trip exit would end the motion otherwise); it starts on the slope (the trailing foot).
+    # declared clearance constraint; a simulation would end in a trip otherwise); it starts on the
+    # slope (the trailing foot), 1e-12, and rises at once.
     model, p = gait.model, gait.model.p
     three = model.phases[0]
-    trip = three.transitions[1]
+    clearance = next(c for c in three.constraints if c.outcome == "trip")
+    assert clearance.at_start
     arc = gait.orbit[0]
-    height = np.array([float(trip.guard(arc.x[:, j], [], p)) for j in range(arc.x.shape[1])])
+    height = np.array(
+        [float(clearance.function(arc.x[:, j], [], p)) for j in range(arc.x.shape[1])]
+    )
     assert height[0] == pytest.approx(0.0, abs=1e-12)
     assert np.all(height[1:] > 0)
 

@@ -133,7 +133,27 @@ class BouncingBall(HybridModel):
             "phase wrapped into [−π, π)",
         )
         energy = sym.conserved("energy", x, 0.5 * y_dot**2 + g * y)  # per unit mass (J/kg)
-        flight = Phase("flight", ("phase", "y", "y_dot"), flow, (impact,), {"energy": energy})
+        # The ball stays above the table between impacts; it leaves the table at once after an
+        # impact (it would otherwise stick to it: the chattering/sticking motions of Holmes 1982
+        # are not a gait of this model).
+        above = sym.constraint(
+            "ball above the table",
+            x,
+            y - amp * ca.sin(phase),
+            "ball below the table",
+            at_start=True,
+            at_end=True,
+            unit="m",
+            source="the table is solid (Holmes 1982)",
+        )
+        flight = Phase(
+            "flight",
+            ("phase", "y", "y_dot"),
+            flow,
+            (impact,),
+            {"energy": energy},
+            constraints=(above,),
+        )
         s = ca.SX.sym("s", 2)
         section = Section(
             ("phase", "y_dot"),

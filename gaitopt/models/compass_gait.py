@@ -5,7 +5,10 @@ passive gaits", INRIA RR-2996); conventions and defaults of Drake's ``CompassGai
 (``drake/examples/compass_gait``): absolute leg angles from vertical, positive when the leg leans
 downhill (the hip ahead of the foot for the stance leg); heel strike when
 ``stance + swing = 2·slope`` with the swing foot ahead (``swing < stance``); the mid-swing scuff
-of the foot through the ground is ignored, as in Drake and Goswami.
+of the foot through the ground is ignored, as in Drake and Goswami (a compass gait's straight swing
+leg cannot clear the ground where it passes the stance leg: that convention is what makes the
+model walk; the kneed walker is the model that clears it).  The one unilateral constraint checked
+is that the stance foot pushes: the ground's normal force ``N = n · Σ m_i (r̈_i + g ŷ) ≥ 0``.
 
 Masses: hip point mass ``m_h``; each leg a point mass ``m`` at distance ``a`` from its foot and
 ``b`` from the hip (leg length ``l = a + b``).  The dynamics follow from Lagrange's equations and
@@ -24,6 +27,7 @@ import casadi as ca
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..mechanics import (
     bodies_function,
+    contact_force,
     impact_velocity,
     kinetic_energy,
     lagrange_acceleration,
@@ -141,6 +145,15 @@ class CompassGait(HybridModel):
             "energy", x, kinetic_energy(masses, q, qd) + potential_energy(masses, g)
         )
         points = ca.Function("points", [x, sym.p], [ca.horzcat(ca.DM.zeros(2, 1), hip, swing_foot)])
+        normal = ca.vertcat(ca.sin(gamma), ca.cos(gamma))  # the slope's upward normal
+        push = sym.constraint(
+            "stance foot pushes on the slope",
+            x,
+            ca.dot(normal, contact_force(masses, q, qd, qdd, g)),
+            "stance foot lifts off",
+            unit="N",
+            source="a ground contact can only push (unilateral normal force)",
+        )
         phase = Phase(
             "single support",
             ("stance", "swing", "stance_dot", "swing_dot"),
@@ -150,6 +163,7 @@ class CompassGait(HybridModel):
             points=points,
             point_names=("stance_foot", "hip", "swing_foot"),
             bodies=bodies_function(masses, x, q, qd, sym.p),
+            constraints=(push,),
         )
         s, (s_stance, s_stance_dot, s_swing_dot) = sym.states("stance", "stance_dot", "swing_dot")
         section = Section(
@@ -162,3 +176,11 @@ class CompassGait(HybridModel):
     def default_start(self) -> dict[str, float]:
         """A post-impact state near the passive gait at Drake's defaults (rounded)."""
         return {"stance": -0.2, "stance_dot": 1.0, "swing_dot": 0.4}
+
+    def input_rates(self, phase: int) -> ca.Function:
+        """The hip torque acts between the legs (``B = [−1, 1]ᵀ``): its power is
+        ``τ (swing_dot − stance_dot)`` (W)."""
+        del phase
+        x = ca.SX.sym("x", 4)
+        p = ca.SX.sym("p", len(self.parameter_specs()))
+        return ca.Function("input_rates", [x, p], [x[3] - x[2]], ["x", "p"], ["rates"])

@@ -74,6 +74,7 @@ from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..mechanics import (
     bodies_function,
     constrained_impact_velocity,
+    contact_force,
     impact_velocity,
     kinetic_energy,
     lagrange_acceleration,
@@ -288,16 +289,30 @@ class KneedWalker(HybridModel):
             doc="q2 − q3 rises through 0 (the flexed knee straightens); plastic impact locking "
             "the knee: M Δq̇ = Jᵀ Λ, q̇3⁺ = q̇2⁺",
         )
-        # The swing foot must clear the slope until the knee locks: its height above the slope
-        # (the arc's lowest point; for R = 0 the foot) falling through 0 is a trip.  It starts at
-        # 0 (the trailing foot leaves the ground), so it counts only after the foot has lifted.
-        trip = Transition(
-            name="trip",
-            guard=sym.function("guard", x0, ca.dot(geo0["normal"], geo0["swing_contact"])),
-            direction=-1,
-            reset=None,
-            target=None,
-            doc="the swing foot touches the slope before the knee locks",
+        # Unilateral constraints (the physics of a foot and a ground contact).  The swing foot
+        # must clear the slope: its height above it (the arc's lowest point; for R = 0 the foot;
+        # for curved feet the full circle's lowest point, conservative for a foot that is only
+        # an arc of it).  It starts at 0 (the trailing foot is on the slope at heel strike), so
+        # it must rise at once: a foot that does not lift off is not this gait (it would need a
+        # double-support phase, not modelled).  The stance contact must push: the ground's
+        # normal force N = n · Σ m_i (r̈_i + g ŷ) ≥ 0.
+        clearance0 = sym.constraint(
+            "swing foot above the slope",
+            x0,
+            ca.dot(geo0["normal"], geo0["swing_contact"]),
+            "trip",
+            at_start=True,
+            unit="m",
+            source="a foot cannot enter the ground (McGeer 1990; Hsu Chen 2007, foot clearance)",
+        )
+        qdd0 = lagrange_acceleration(masses0, q, qd, g)
+        push0 = sym.constraint(
+            "stance foot pushes on the slope",
+            x0,
+            ca.dot(geo0["normal"], contact_force(masses0, q, qd, qdd0, g)),
+            "stance foot lifts off",
+            unit="N",
+            source="a ground contact can only push (unilateral normal force)",
         )
         fall0 = Transition(
             name="fall",
@@ -314,11 +329,12 @@ class KneedWalker(HybridModel):
             "three-link swing",
             names0,
             flow0,
-            (knee_strike, trip, fall0),
+            (knee_strike, fall0),
             {"energy": energy0},
             points=_points(sym, x0, geo0),
             point_names=POINT_NAMES,
             bodies=bodies_function(masses0, x0, q, qd, sym.p),
+            constraints=(clearance0, push0),
         )
 
         # -- phase 1: two-link swing (knee locked) -----------------------------------------------
@@ -345,6 +361,27 @@ class KneedWalker(HybridModel):
             "q1 = q2 and touchdowns behind are excluded); knee-locked plastic impact; legs swap; "
             "new swing knee released",
         )
+        # With the knee locked the swing foot must still clear the slope until heel strike, where
+        # its height returns to 0 (h = −2 (L − R) sin((q1 + q2)/2 − γ) sin((q1 − q2)/2): a leg
+        # whose knee locks before it passes the stance leg scuffs); the stance foot must push.
+        clearance1 = sym.constraint(
+            "swing foot above the slope",
+            x1,
+            ca.dot(geo1["normal"], geo1["swing_contact"]),
+            "trip",
+            at_end=True,
+            unit="m",
+            source="a foot cannot enter the ground (McGeer 1990; Hsu Chen 2007, foot clearance)",
+        )
+        qdd1 = lagrange_acceleration(masses1, r, rd, g)
+        push1 = sym.constraint(
+            "stance foot pushes on the slope",
+            x1,
+            ca.dot(geo1["normal"], contact_force(masses1, r, rd, qdd1, g)),
+            "stance foot lifts off",
+            unit="N",
+            source="a ground contact can only push (unilateral normal force)",
+        )
         fall1 = Transition(
             name="fall",
             guard=sym.function("guard", x1, ca.cos(p1)),
@@ -365,6 +402,7 @@ class KneedWalker(HybridModel):
             points=_points(sym, x1, geo1),
             point_names=POINT_NAMES,
             bodies=bodies_function(masses1, x1, r, rd, sym.p),
+            constraints=(clearance1, push1),
         )
 
         # -- section: just after heel strike ----------------------------------------------------

@@ -95,6 +95,18 @@ class SimplestWalker(HybridModel):
             ["x", "p"],
             ["m", "r", "v"],
         )
+        # The stance leg pushes: on a massless leg the hip's weight and centripetal force give
+        # the leg compression m_h (g cos(θ − γ) − l θ̇²) ≥ 0 (scaled by m_h g): the walking speed
+        # limit Froude < 1 (Alexander 1976; Kuo 2007).  The swing foot's scuff near φ = 0 is
+        # ignored, as in Garcia et al. 1998.
+        push = sym.constraint(
+            "stance leg in compression",
+            x,
+            ca.cos(theta - gamma) - theta_dot**2,
+            "stance foot lifts off",
+            unit="m_h·g",
+            source="hip mass on a massless leg: leg force m_h (g cos(θ − γ) − l θ̇²) ≥ 0",
+        )
         phase = Phase(
             "single support",
             ("theta", "phi", "theta_dot", "phi_dot"),
@@ -104,6 +116,7 @@ class SimplestWalker(HybridModel):
             points=points,
             point_names=("stance_foot", "hip", "swing_foot"),
             bodies=bodies,
+            constraints=(push,),
         )
         s, (s_theta, s_theta_dot) = sym.states("theta", "theta_dot")
         lift = ca.vertcat(

@@ -194,6 +194,18 @@ def _build(cls: type[HybridModel], sym: Symbols, angle_law) -> tuple[tuple[Phase
         [xs, sym.p],
         [ca.horzcat(ca.vertcat(hip_x, r * ca.cos(th)), ca.DM.zeros(2, 1))],
     )
+    # The massless spring leg can only push: its force k (l0 − r) ≥ 0 (zero at touchdown and
+    # at liftoff, where r = l0: it must compress at once after touchdown).
+    compressed = sym.constraint(
+        "leg force compressive",
+        xs,
+        k * (l0 - r),
+        "leg pulls",
+        at_start=True,
+        at_end=True,
+        unit="N",
+        source="a massless spring leg on the ground can only push (Blickhan 1989)",
+    )
     stance = Phase(
         "stance",
         ("r", "theta", "r_dot", "theta_dot"),
@@ -202,6 +214,7 @@ def _build(cls: type[HybridModel], sym: Symbols, angle_law) -> tuple[tuple[Phase
         {"energy": stance_energy},
         points=stance_points,
         point_names=("hip", "foot"),
+        constraints=(compressed,),
     )
 
     # -- flight: ascent to the apex ------------------------------------------------------------
