@@ -16,6 +16,8 @@ from the model's default start and write, under ``OUT/<model>/``,
   wheel's closed-form map overlaid).
 
 When the search fails only ``cycle.json`` is written (and figures of an earlier run removed).
+An actuated-only model (``passive_gait`` False: the five-link biped) has no passive gait to
+search for; it is skipped, with the reason, and does not count as a failure.
 
 Every file is written whole or not at all (:mod:`gaitopt.files`: a temporary file in the same
 directory, then :func:`os.replace`).  A summary table ends the run.  Exit status: 0 when every
@@ -131,10 +133,13 @@ def _fmt(value: float, spec: str) -> str:
     return "—" if value is None or not math.isfinite(value) else format(value, spec)
 
 
-def _summary(rows: list[tuple[str, LimitCycle | None]]) -> str:
+def _summary(rows: list[tuple[str, LimitCycle | str | None]]) -> str:
     header = ("model", "period", "max |mult|", "stable", "verified", "solve (ms)")
     lines = [header]
     for name, c in rows:
+        if isinstance(c, str):  # skipped, with the reason
+            lines.append((name, "skipped", "—", "—", "—", "—"))
+            continue
         if c is None:
             lines.append((name, "error", "—", "—", "—", "—"))
             continue
@@ -186,9 +191,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     out = Path(args.out)
 
-    rows: list[tuple[str, LimitCycle | None]] = []
+    rows: list[tuple[str, LimitCycle | str | None]] = []
     failed = False
     for k, name in enumerate(names, 1):
+        if not REGISTRY[name].passive_gait:
+            reason = make_model(name).existence_note() or "no passive gait"
+            print(f"[{k}/{len(names)}] {name}: skipped (actuated-only: {reason})", flush=True)
+            rows.append((name, reason))
+            continue
         print(f"[{k}/{len(names)}] {name}: solving ...", flush=True)
         start = time.perf_counter()
         try:

@@ -6,6 +6,7 @@ from ..errors import ParameterError, UnknownModelError, did_you_mean
 from ..hybrid import HybridModel
 from .bouncing_ball import BouncingBall
 from .compass_gait import CompassGait
+from .five_link_biped import FiveLinkBiped
 from .kneed_walker import KneedWalker
 from .line_juggler import LineJuggler
 from .planar_juggler import PlanarJuggler
@@ -18,6 +19,7 @@ from .vertical_hopper import VerticalHopper
 
 __all__ = [
     "REGISTRY", "model", "BouncingBall", "CompassGait", "KneedWalker", "LineJuggler",
+    "FiveLinkBiped",
     "PlanarJuggler",
     "RaibertHopper",
     "RimlessWheel", "SimplestWalker", "Slip", "VanDerPol",
@@ -32,6 +34,7 @@ REGISTRY: dict[str, type[HybridModel]] = {
         CompassGait,
         SimplestWalker,
         KneedWalker,
+        FiveLinkBiped,
         Slip,
         VerticalHopper,
         RaibertHopper,
