@@ -788,12 +788,19 @@ def _continue_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--out",
         metavar="DIR",
-        help="write branch.json, branch.csv and branch.png to DIR",
+        help="write branch.json, branch.csv and branch.png to DIR (with --follow: curve.*)",
     )
+    from .cli_curves import add_curve_arguments  # two-parameter curves (--follow)
+
+    add_curve_arguments(parser)
 
 
 def run_continue(args: argparse.Namespace) -> int:
     """``gaitopt continue``: follow a gait through a parameter; special points; cascades."""
+    from .cli_curves import run_curve, wants_curve
+
+    if wants_curve(args):  # --follow: a special point in two parameters
+        return run_curve(args)
     model = build_model(args.model, args.set)
     specs = {s.name: s for s in model.parameter_specs()}
     if args.param not in specs:
