@@ -1,0 +1,30 @@
+"""Optimal gait synthesis: actuated gaits that minimise effort, positive work or cost of transport.
+
+* :mod:`~gaitopt.optimize.problem` — the statement (cost, fixed/free period, step length, speed,
+  bounds, free parameters);
+* :mod:`~gaitopt.optimize.collocation` — its Legendre–Gauss–Radau transcription;
+* :mod:`~gaitopt.optimize.solve` — IPOPT with exact derivatives, multi-start, mesh refinement;
+* :mod:`~gaitopt.optimize.verify` and :mod:`~gaitopt.optimize.floquet` — trust: dense checks,
+  independent simulation, multipliers two ways;
+* :mod:`~gaitopt.optimize.result` — :class:`OptimalGait`.
+"""
+
+from __future__ import annotations
+
+from .collocation import Collocation, RadauMesh
+from .problem import COSTS, GaitProblem
+from .profile import InputProfile
+from .result import Minimum, OptimalGait
+from .solve import optimize_gait, solve_problem
+
+__all__ = [
+    "optimize_gait",
+    "solve_problem",
+    "GaitProblem",
+    "Collocation",
+    "RadauMesh",
+    "InputProfile",
+    "OptimalGait",
+    "Minimum",
+    "COSTS",
+]

@@ -1,0 +1,129 @@
+"""Floquet multipliers of an optimal gait with its input applied as a feedforward ``u(t)``.
+
+The return map takes section coordinates ``s`` to those of the next return, with the input a
+fixed function of the time since the section (so a perturbed step that lasts longer or shorter
+sees the same ``u(t)``; past the profile's end the last value holds).  Its Jacobian is built
+here by differentiating *the transcription itself*: on each phase, the Radau collocation
+equations at the nominal duration define the discrete flow map; the implicit function theorem
+on them (exact CasADi derivatives) gives its sensitivity to the phase's start state and to a
+shift ``δt₀`` of its start time (which shifts the inputs the nodes see by ``u̇ δt₀``).  Each phase
+end adds the time to the guard, ``δτ = −(g_x δx + g_u u̇ δt₀) / ġ`` (the saltation correction,
+Aizerman & Gantmacher 1958; Hiskens & Pai 2000), and the reset's Jacobian.  The independent
+check is :func:`gaitopt.optimize.verify.map_jacobian_fd`: finite differences of the simulated
+map.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from .collocation import Collocation, _derivative_matrix
+
+__all__ = ["return_map_jacobian"]
+
+
+@lru_cache(maxsize=32)
+def _phase_residual(flow: ca.Function, N: int, d: int, C_key: bytes) -> ca.Function:
+    """``R(Xfree, x0, dt0, U, Udot, T, p)``: collocation defects with shifted node inputs, and
+    its Jacobians with respect to ``Xfree`` and ``[x0; dt0]``."""
+    C = np.frombuffer(C_key).reshape(d + 1, d)
+    n, n_u, n_p = flow.size1_in(0), flow.size1_in(1), flow.size1_in(2)
+    Xf = ca.SX.sym("X", n, N * d)
+    x0 = ca.SX.sym("x0", n)
+    dt0 = ca.SX.sym("dt0")
+    U = ca.SX.sym("U", n_u, N * d)
+    Ud = ca.SX.sym("Ud", n_u, N * d)
+    T = ca.SX.sym("T")
+    p = ca.SX.sym("p", n_p)
+    X = ca.horzcat(x0, Xf)
+    F = flow.map(N * d)(Xf, U + Ud * dt0, p)
+    h = T / N
+    defects = [
+        ca.mtimes(X[:, j * d : j * d + d + 1], ca.DM(C)) - h * F[:, j * d : (j + 1) * d]
+        for j in range(N)
+    ]
+    R = ca.vec(ca.horzcat(*defects))
+    z = ca.vertcat(x0, dt0)
+    return ca.Function(
+        "phase_sensitivity",
+        [Xf, x0, dt0, U, Ud, T, p],
+        [ca.jacobian(R, ca.vec(Xf)), ca.jacobian(R, z)],
+    )
+
+
+@lru_cache(maxsize=64)
+def _end_jacobians(flow: ca.Function, guard: ca.Function, reset: ca.Function) -> ca.Function:
+    """``(f, g_x, g_u, r_x, r_u)`` at a phase end."""
+    n, n_u, n_p = flow.size1_in(0), flow.size1_in(1), flow.size1_in(2)
+    x, u, p = ca.SX.sym("x", n), ca.SX.sym("u", n_u), ca.SX.sym("p", n_p)
+    g, r = guard(x, u, p), reset(x, u, p)
+    return ca.Function(
+        "end_jacobians",
+        [x, u, p],
+        [flow(x, u, p), ca.jacobian(g, x), ca.jacobian(g, u), ca.jacobian(r, x), ca.jacobian(r, u)],
+    )
+
+
+@lru_cache(maxsize=32)
+def _lift_jacobian(lift: ca.Function) -> ca.Function:
+    s, p = ca.SX.sym("s", lift.size1_in(0)), ca.SX.sym("p", lift.size1_in(1))
+    return ca.Function("lift_jacobian", [s, p], [ca.jacobian(lift(s, p), s)])
+
+
+def return_map_jacobian(col: Collocation, w: np.ndarray, p_model: np.ndarray) -> np.ndarray:
+    """``∂P/∂s`` of the return map (all ``steps`` returns of the orbit) in section coordinates,
+    with the optimal input as a feedforward in the time since each return to the section."""
+    sol = col.unpack(w, p_model)
+    p = sol["p"]
+    model = col.model
+    N, d = col.N, col.d
+    D = _derivative_matrix(col.tau[1:], col.tau[1:])  # du/dτ at the Radau points
+    n_cycle = len(model.phases)
+    s = sol["s"]
+    L = np.asarray(_lift_jacobian(model.section.lift)(s, p), dtype=float)
+    n0 = model.phases[0].n
+    M = np.vstack([L, np.zeros((1, L.shape[1]))])  # (δx, δt) per unit δs
+    for k, i in enumerate(col.chain):
+        phase = model.phases[i]
+        tr = phase.transitions[0]
+        X, U, T = sol["X"][k], sol["U"][k], float(sol["T"][k])
+        h = T / N
+        Ud = np.hstack([U[:, j * d : (j + 1) * d] @ D.T / h for j in range(N)])
+        sens = _phase_residual(phase.flow, N, d, col.C.tobytes())
+        R_X, R_z = (np.asarray(v, dtype=float) for v in sens(X[:, 1:], X[:, 0], 0.0, U, Ud, T, p))
+        dX = -np.linalg.solve(R_X, R_z)  # ∂vec(Xfree)/∂[x0; dt0]
+        n = phase.n
+        Phi = dX[-n:, :]  # the end state: last column of Xfree
+        x_end, u_end = X[:, -1], U[:, -1]
+        f, g_x, g_u, r_x, r_u = (
+            np.asarray(v, dtype=float)
+            for v in _end_jacobians(phase.flow, tr.guard, tr.reset)(x_end, u_end, p)
+        )
+        udot = Ud[:, -1]
+        f = f.ravel()
+        g_rate = float((g_x @ f + g_u @ udot).ravel()[0])
+        # (δx_end at the nominal end, δt0) -> crossing: δτ = −(g_x δx + g_u u̇ δt0)/ġ.
+        dxe = Phi  # n × (n+1) in (δx0, δt0)
+        dt0 = np.zeros((1, n + 1))
+        dt0[0, -1] = 1.0
+        dtau = -(g_x @ dxe + (g_u @ udot) * dt0) / g_rate
+        dx_minus = dxe + np.outer(f, dtau)
+        dt_event = dt0 + dtau
+        dx_plus = r_x @ dx_minus + np.outer(r_u @ udot, dt_event)
+        step = np.vstack([dx_plus, dt_event])
+        M = step @ M
+        if (k + 1) % n_cycle == 0:
+            M[-1, :] = 0.0  # the feedforward clock restarts at the section
+    del n0
+    return M[:-1, :][col.section_index, :]
+
+
+def multipliers_of(A: np.ndarray) -> np.ndarray:
+    """Eigenvalues of the return-map Jacobian, largest modulus first."""
+    if A.size == 0:
+        return np.zeros(0, complex)
+    mu = np.linalg.eigvals(A)
+    return mu[np.argsort(-np.abs(mu))]

@@ -1,0 +1,308 @@
+"""The gait optimisation problem: what is minimised, what is fixed, what is bounded.
+
+A :class:`GaitProblem` is the statement only (no discretisation): a model, a running cost
+integrated over one orbit of ``steps`` returns to the section, and the gait constraints of
+issue 11 — period, step length, average speed (fixed or free), bounds on the inputs and states,
+parameters made decision variables.  The transcription (:mod:`gaitopt.optimize.collocation`)
+turns it into a nonlinear program.
+
+Costs (all integrated over the whole orbit, ``t ∈ [0, period]``):
+
+* ``"effort"``: ``∫ Σᵢ uᵢ² dt`` (N²·m²·s for torques);
+* ``"work"``: positive actuator work ``∫ Σᵢ max(0, uᵢ ωᵢ) dt`` (J), with ``ωᵢ`` the rate input ``i``
+  does work on (:meth:`gaitopt.HybridModel.input_rates`).  Written exactly with slack powers
+  ``pᵢ⁺ − pᵢ⁻ = uᵢ ωᵢ``, ``pᵢ± ≥ 0``, cost ``∫ Σ pᵢ⁺``: at an optimum one of each pair vanishes
+  (otherwise lowering both lowers the cost), so ``pᵢ⁺ = max(0, uᵢ ωᵢ)`` there; the solution is
+  checked for it;
+* ``"cot"``: cost of transport, positive work / (total mass · g · distance travelled), with the
+  distance the sum of the step lengths;
+* a callable ``cost(x, u, p) -> scalar`` of CasADi symbols: the integrand, user's units.
+
+Step length is the distance between the feet at heel strike: the norm of the new foothold (the
+phase point named by the cycle transition's ``foothold``, positions relative to the stance foot)
+at the end of the phase.  Speed is the total step length over the period.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..errors import GaitoptInputError, did_you_mean
+from ..hybrid import HybridModel
+
+__all__ = ["GaitProblem", "COSTS", "cost_unit"]
+
+COSTS = ("effort", "work", "cot")
+_UNITS = {"effort": "N^2*m^2*s", "work": "J", "cot": "1"}
+
+
+def cost_unit(kind: str) -> str:
+    """Unit of a named cost (``"effort"``: N²·m²·s for torques)."""
+    return _UNITS.get(kind, "user units")
+
+
+def _positive(name: str, value: Any, *, allow_none: bool = True) -> float | None:
+    if value is None and allow_none:
+        return None
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = math.nan
+    if not math.isfinite(number) or number <= 0:
+        raise GaitoptInputError(
+            f"`{name}` must be a positive finite number, got {value!r}; e.g. {name}=0.8"
+        )
+    return number
+
+
+@dataclass(frozen=True)
+class GaitProblem:
+    """An optimal gait problem (the statement, without discretisation).
+
+    Attributes
+    ----------
+    model : HybridModel
+        The model, with its parameters (the free ones are initial values).
+    cost : str or callable
+        ``"effort"``, ``"work"``, ``"cot"`` or ``cost(x, u, p) -> scalar`` (the integrand).
+    period : float or None
+        Duration of the orbit (s); ``None`` leaves it free.
+    step_length : float or None
+        Distance between the feet at heel strike, averaged over the steps (m); ``None``: free.
+    speed : float or None
+        Total step length over the period (m/s); ``None``: free.
+    bounds : mapping of str to float
+        ``{input: max}``: ``|u_input| ≤ max`` (input units) at every collocation point.
+    state_bounds : mapping of str to (float, float)
+        ``{state: (low, high)}`` at every node (joint limits, rate limits; state units).
+    free : tuple of str
+        Parameters made decision variables, within their declared ranges.
+    steps : int
+        Returns to the section per orbit.
+    max_phase_time : float
+        Upper bound of every phase duration (s).
+    min_crossing_rate : float
+        Least rate at which each phase's guard is crossed at its end, ``direction · ġ`` (guard
+        units per second): a transversal touchdown, not a graze, which no simulation could
+        locate robustly.  Reported among the active constraints when it binds.
+    """
+
+    model: HybridModel
+    cost: str | Callable[..., Any] = "effort"
+    period: float | None = None
+    step_length: float | None = None
+    speed: float | None = None
+    bounds: Mapping[str, float] = field(default_factory=dict)
+    state_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    free: tuple[str, ...] = ()
+    steps: int = 1
+    max_phase_time: float = 10.0
+    min_crossing_rate: float = 1e-2
+
+    def __post_init__(self) -> None:
+        model = self.model
+        if not isinstance(model, HybridModel):
+            raise GaitoptInputError(
+                f"`model` must be a gaitopt model, got {type(model).__name__}; "
+                f"e.g. gaitopt.model('compass_gait')"
+            )
+        if not model.inputs:
+            raise GaitoptInputError(
+                f"`model` {model.name!r} has no inputs to optimise; choose an actuated model "
+                f"(e.g. compass_gait)"
+            )
+        if isinstance(self.cost, str):
+            if self.cost not in COSTS:
+                raise GaitoptInputError(
+                    f"`cost` must be one of {', '.join(COSTS)} or a CasADi callable, got "
+                    f"{self.cost!r}; {did_you_mean(self.cost, COSTS)}e.g. cost='effort'"
+                )
+            if self.cost in ("work", "cot"):
+                missing = [i for i in range(len(model.phases)) if model.input_rates(i) is None]
+                if missing:
+                    raise GaitoptInputError(
+                        f"`cost` {self.cost!r} needs the rates the inputs do work on, which "
+                        f"{model.name} does not declare (HybridModel.input_rates); use "
+                        f"cost='effort'"
+                    )
+        elif not callable(self.cost):
+            raise GaitoptInputError(
+                f"`cost` must be a name or a callable cost(x, u, p), got {self.cost!r}"
+            )
+        object.__setattr__(self, "period", _positive("period", self.period))
+        object.__setattr__(self, "step_length", _positive("step_length", self.step_length))
+        object.__setattr__(self, "speed", _positive("speed", self.speed))
+        if self.period is not None and self.step_length is not None and self.speed is not None:
+            if abs(self.step_length * self.steps / self.period - self.speed) > 1e-12 * self.speed:
+                raise GaitoptInputError(
+                    f"`speed` {self.speed:g} contradicts step_length/period = "
+                    f"{self.step_length * self.steps / self.period:g}; fix at most two of them"
+                )
+        if not isinstance(self.steps, int) or self.steps < 1:
+            raise GaitoptInputError(f"`steps` must be a positive integer, got {self.steps!r}")
+        for name, value in dict(self.bounds).items():
+            if name not in model.inputs:
+                raise GaitoptInputError(
+                    f"`bounds` names unknown input {name!r}; {did_you_mean(name, model.inputs)}"
+                    f"{model.name}'s inputs: {', '.join(model.inputs)}"
+                )
+            _positive(f"bounds[{name!r}]", value, allow_none=False)
+        states = model.state_names
+        for name, pair in dict(self.state_bounds).items():
+            if name not in states:
+                raise GaitoptInputError(
+                    f"`state_bounds` names unknown state {name!r}; {did_you_mean(name, states)}"
+                    f"the states are {', '.join(states)}"
+                )
+            low, high = (float(v) for v in pair)
+            if not low < high:
+                raise GaitoptInputError(
+                    f"`state_bounds[{name!r}]` must be (low, high) with low < high, got {pair!r}"
+                )
+        params = model.params
+        free = tuple(self.free)
+        for name in free:
+            if name not in params:
+                raise GaitoptInputError(
+                    f"`free` names unknown parameter {name!r}; {did_you_mean(name, params)}"
+                    f"{model.name}'s parameters: {', '.join(params)}"
+                )
+        object.__setattr__(self, "free", free)
+        if self.cost in ("work", "cot") or self.step_length or self.speed:
+            if self.footholds() is None:
+                raise GaitoptInputError(
+                    f"{model.name} declares no foothold, so step length, speed and cost of "
+                    f"transport are undefined; leave them free and use cost='effort'"
+                )
+
+    # -- names and sizes ---------------------------------------------------------------------
+    @property
+    def cost_kind(self) -> str:
+        """``"effort"``, ``"work"``, ``"cot"`` or ``"custom"``."""
+        return self.cost if isinstance(self.cost, str) else "custom"
+
+    @property
+    def chain(self) -> list[int]:
+        """Phase indices of the orbit, in order (``steps`` cycles)."""
+        return [i for _ in range(self.steps) for i in range(len(self.model.phases))]
+
+    @property
+    def free_index(self) -> list[int]:
+        """Positions of the free parameters in ``p``."""
+        names = [s.name for s in self.model.parameter_specs()]
+        return [names.index(n) for n in self.free]
+
+    def free_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Declared ranges of the free parameters (open ends nudged inside by 1e-9)."""
+        specs = {s.name: s for s in self.model.parameter_specs()}
+        low, high = [], []
+        for name in self.free:
+            spec = specs[name]
+            lo = float(spec.low) + (1e-9 if spec.low_open else 0.0)
+            hi = float(spec.high) - (1e-9 if spec.high_open else 0.0)
+            low.append(lo)
+            high.append(hi)
+        return np.array(low), np.array(high)
+
+    def input_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(low, high)`` of the inputs (``±inf`` where unbounded)."""
+        high = np.array([float(self.bounds.get(n, np.inf)) for n in self.model.inputs])
+        return -high, high
+
+    def state_bounds_of(self, phase: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(low, high)`` of the states of ``phase`` (by name; ``±inf`` where unbounded)."""
+        names = self.model.phases[phase].states
+        low = np.array([float(self.state_bounds.get(n, (-np.inf, np.inf))[0]) for n in names])
+        high = np.array([float(self.state_bounds.get(n, (-np.inf, np.inf))[1]) for n in names])
+        return low, high
+
+    # -- measures ----------------------------------------------------------------------------
+    def footholds(self) -> list[tuple[int, int] | None] | None:
+        """Per phase: (phase, column of ``points``) of the foothold its cycle transition makes,
+        or None; ``None`` overall if no phase declares one."""
+        out: list[tuple[int, int] | None] = []
+        for i, phase in enumerate(self.model.phases):
+            name = phase.transitions[0].foothold
+            if name and phase.points is not None and name in phase.point_names:
+                out.append((i, phase.point_names.index(name)))
+            else:
+                out.append(None)
+        return out if any(o is not None for o in out) else None
+
+    def step_vector(self, phase: int, x: Any, p: Any) -> Any:
+        """The new foothold relative to the stance foot at the end of ``phase`` (2-vector, m),
+        or None if the phase makes none."""
+        feet = self.footholds()
+        if feet is None or feet[phase] is None:
+            return None
+        _, column = feet[phase]
+        return self.model.phases[phase].points(x, p)[:, column]
+
+    def total_mass(self, p: Any) -> Any:
+        """Total mass (kg) from the model's point masses (``Phase.bodies``)."""
+        phase = self.model.phases[0]
+        if phase.bodies is None:
+            raise GaitoptInputError(
+                f"cost 'cot' needs {self.model.name}'s masses (Phase.bodies), which it does not "
+                f"declare; use cost='work'"
+            )
+        symbolic = isinstance(p, (ca.MX, ca.SX))
+        x = ca.MX.zeros(phase.n) if symbolic else ca.DM.zeros(phase.n)
+        total = ca.sum1(phase.bodies(x, p)[0])
+        return total if symbolic else float(total)
+
+    def gravity(self, p: Any) -> Any:
+        """Gravitational acceleration (m/s²) from the parameter ``gravity`` or ``g``."""
+        names = [s.name for s in self.model.parameter_specs()]
+        for name in ("gravity", "g"):
+            if name in names:
+                return p[names.index(name)]
+        raise GaitoptInputError(
+            f"cost 'cot' needs {self.model.name}'s gravity parameter (`gravity` or `g`); "
+            f"use cost='work'"
+        )
+
+    def integrand(self, phase: int, x: Any, u: Any, p: Any) -> Any:
+        """Running cost of a smooth cost at one point (effort or custom; work uses slacks)."""
+        if self.cost == "effort":
+            return ca.sumsqr(u)
+        if callable(self.cost):
+            value = self.cost(x, u, p)
+            return value if not isinstance(value, (int, float)) else ca.MX(value)
+        raise AssertionError("work-based costs are built from slack powers")
+
+    def power(self, phase: int, x: Any, u: Any, p: Any) -> Any:
+        """Actuator powers ``uᵢ ωᵢ`` (W), one per input."""
+        rates = self.model.input_rates(phase)
+        return u * rates(x, p)
+
+    def describe(self) -> dict[str, Any]:
+        """The statement as plain data (for messages and JSON)."""
+        return {
+            "cost": self.cost_kind,
+            "period": self.period,
+            "step_length": self.step_length,
+            "speed": self.speed,
+            "bounds": dict(self.bounds),
+            "state_bounds": {k: list(v) for k, v in dict(self.state_bounds).items()},
+            "free": list(self.free),
+            "steps": self.steps,
+        }
+
+
+def as_problem(model: HybridModel, **kwargs: Any) -> GaitProblem:
+    """A :class:`GaitProblem` from keyword arguments (the public API's names)."""
+    bounds = kwargs.pop("bounds", None) or {}
+    state_bounds = kwargs.pop("state_bounds", None) or {}
+    free = kwargs.pop("free", None) or ()
+    if isinstance(free, str):
+        free = (free,)
+    return GaitProblem(
+        model, bounds=dict(bounds), state_bounds=dict(state_bounds), free=tuple(free), **kwargs
+    )

@@ -1,0 +1,177 @@
+"""The result of :func:`gaitopt.optimize_gait`: an optimal gait, or why there is none."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..files import jsonable
+
+__all__ = ["OptimalGait", "Minimum"]
+
+
+@dataclass
+class Minimum:
+    """A distinct local minimum found by a multi-start.
+
+    Attributes
+    ----------
+    cost : float
+        Optimal cost (units of the cost kind).
+    period : float
+        Period (s).
+    fixed_point : dict of str to float
+        State on the section.
+    starts : list of int
+        The starts (0-based) that reached it.
+    verified : bool
+        Whether it passed the dense and simulation checks on the starts' mesh.
+    """
+
+    cost: float
+    period: float
+    fixed_point: dict[str, float]
+    starts: list[int] = field(default_factory=list)
+    verified: bool = False
+
+    def to_json(self) -> dict[str, Any]:
+        """Plain JSON types."""
+        return jsonable(
+            {
+                "cost": self.cost,
+                "period": self.period,
+                "fixed_point": self.fixed_point,
+                "starts": self.starts,
+                "count": len(self.starts),
+                "verified": self.verified,
+            }
+        )
+
+
+@dataclass
+class OptimalGait:
+    """An optimal gait, or the record of a failed optimisation.
+
+    Attributes
+    ----------
+    success : bool
+        True only if IPOPT converged, every physical check passed on dense samples, the
+        independent simulation with the input profile returned to the fixed point with the same
+        cost, and the discretisation error estimate met its target.
+    message : str
+        What was found, or which constraint cannot be met.
+    model : HybridModel
+        The model with its parameters (free ones at their optimal values).
+    cost_kind : str
+        ``"effort"`` (N²·m²·s), ``"work"`` (J), ``"cot"`` (1) or ``"custom"``.
+    cost : float or None
+        Optimal cost over one orbit.
+    period, step_length, speed : float or None
+        Orbit duration (s), mean distance between the feet at heel strike (m), their ratio
+        over the period (m/s).
+    fixed_point : dict of str to float
+        State on the section (phase 0, just after the reset that closes the orbit).
+    inputs : dict of str to list of float
+        ``{"time": [...], input: [...]}``: the input profile over one orbit, sampled.
+    profiles : list of InputProfile
+        One per step, in the time since that step's section (for :func:`gaitopt.simulate`'s
+        ``feedforward``).
+    durations : numpy.ndarray
+        Phase durations (s), in orbit order.
+    multipliers : numpy.ndarray
+        Nontrivial Floquet multipliers (AD through the transcription), largest first.
+    multipliers_fd : numpy.ndarray
+        The same by finite differences of the simulated map.
+    stable : bool or None
+        All multipliers strictly inside the unit circle.
+    verified : bool
+        The independent simulation confirms the gait and its cost.
+    verification : dict
+        ``return_error`` (state units), ``cost_simulated``, ``cost_error`` (relative).
+    discretisation_error : float or None
+        Relative change of cost and orbit between the final mesh and the one before.
+    discretisation : dict
+        ``{"intervals", "degree", "cost_error", "orbit_error"}``.
+    active_constraints : list of str
+        Constraints and bounds active at the optimum.
+    minima : list of Minimum
+        Distinct local minima of a multi-start, best first.
+    params : dict of str to float
+        Parameters (free ones optimised).
+    solve_time : float
+        Wall-clock time (s).
+    iterations : int
+        IPOPT iterations of the final solve.
+    """
+
+    success: bool
+    message: str
+    model: Any
+    cost_kind: str
+    cost: float | None = None
+    period: float | None = None
+    step_length: float | None = None
+    speed: float | None = None
+    fixed_point: dict[str, float] = field(default_factory=dict)
+    inputs: dict[str, list[float]] = field(default_factory=dict)
+    profiles: list[Any] = field(default_factory=list)
+    durations: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    multipliers: np.ndarray = field(default_factory=lambda: np.zeros(0, complex))
+    multipliers_fd: np.ndarray = field(default_factory=lambda: np.zeros(0, complex))
+    stable: bool | None = None
+    verified: bool = False
+    verification: dict[str, Any] = field(default_factory=dict)
+    discretisation_error: float | None = None
+    discretisation: dict[str, Any] = field(default_factory=dict)
+    active_constraints: list[str] = field(default_factory=list)
+    minima: list[Minimum] = field(default_factory=list)
+    params: dict[str, float] = field(default_factory=dict)
+    solve_time: float = 0.0
+    iterations: int = 0
+    problem: dict[str, Any] = field(default_factory=dict)
+    orbit: list[Any] = field(default_factory=list)
+
+    def __bool__(self) -> bool:
+        return self.success
+
+    def feedforward(self, t: float, step: int = 0) -> np.ndarray:
+        """The optimal input at time ``t`` since the section of step ``step`` (held after)."""
+        return self.profiles[step % len(self.profiles)](t)
+
+    def to_json(self, *, minima: bool | None = None) -> dict[str, Any]:
+        """The ``gaitopt optimize --json`` object (``minima`` included when there are more
+        starts than one, or when asked)."""
+        data: dict[str, Any] = {
+            "model": self.model.name,
+            "params": self.params or self.model.params,
+            "success": self.success,
+            "message": self.message,
+            "cost_kind": self.cost_kind,
+            "cost": self.cost,
+            "period": self.period,
+            "step_length": self.step_length,
+            "speed": self.speed,
+            "fixed_point": self.fixed_point,
+            "inputs": self.inputs,
+            "multipliers": list(self.multipliers),
+            "multipliers_fd": list(self.multipliers_fd),
+            "stable": self.stable,
+            "verified": self.verified,
+            "verification": self.verification,
+            "discretisation_error": self.discretisation_error,
+            "discretisation": self.discretisation,
+            "active_constraints": self.active_constraints,
+            "durations": self.durations,
+            "problem": self.problem,
+            "solve_time": self.solve_time,
+            "iterations": self.iterations,
+        }
+        if minima or (minima is None and len(self.minima) > 0 and self._multistart):
+            data["minima"] = [m.to_json() for m in self.minima]
+        return jsonable(data)
+
+    @property
+    def _multistart(self) -> bool:
+        return sum(len(m.starts) for m in self.minima) > 1 or len(self.minima) > 1

@@ -1,0 +1,172 @@
+"""Trust in an optimal gait: dense checks of the transcription, independent simulation.
+
+* :func:`check_dense` samples each phase's collocation polynomials: no transition guard is
+  crossed (admissibly, in its direction) before the phase ends, and the model's unilateral
+  constraints hold between the nodes.
+* :func:`simulate_gait` re-simulates the gait with :func:`gaitopt.simulate` (adaptive DOP853 with
+  located events: independent of the collocation) with the optimal input as a feedforward
+  ``u(t)`` in the time since the section; the return must be the fixed point and the cost,
+  computed by Gauss–Legendre quadrature of the simulated trajectory, the optimal cost.
+* :func:`map_jacobian_fd`: the return map's Jacobian by central differences of that simulated
+  map, the check of :func:`gaitopt.optimize.floquet.return_map_jacobian`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..simulation import Simulation, simulate
+from .collocation import Collocation
+from .problem import GaitProblem
+
+__all__ = ["check_dense", "simulate_gait", "simulated_cost", "map_jacobian_fd"]
+
+_SAMPLES = 24  # per mesh interval for the dense checks
+
+
+def check_dense(col: Collocation, sol: dict[str, Any]) -> str | None:
+    """None if the sampled orbit crosses no guard early and meets every constraint; else why."""
+    model, p = col.model, sol["p"]
+    tn = np.linspace(0.0, 1.0, col.N * _SAMPLES + 1)
+    for k, i in enumerate(col.chain):
+        phase = model.phases[i]
+        X, U = col.evaluate(sol["X"][k], sol["U"][k], tn)
+        K = tn.size
+        for j, tr in enumerate(phase.transitions):
+            g = tr.direction * np.asarray(tr.guard.map(K)(X, U, p), dtype=float).ravel()
+            a = (
+                np.asarray(tr.admissible.map(K)(X, U, p), dtype=float).ravel()
+                if tr.admissible is not None
+                else np.ones(K)
+            )
+            scale = 1e-9 * (1 + np.max(np.abs(g)))
+            armed = np.maximum.accumulate(g < -scale)
+            last = K - 1 if j == 0 else K
+            for idx in range(1, last):
+                if armed[idx - 1] and g[idx - 1] < 0 <= g[idx] and (a[idx - 1] > 0 or a[idx] > 0):
+                    return (
+                        f"the orbit crosses '{tr.name}' inside phase '{phase.name}' at "
+                        f"{tn[idx] * sol['T'][k]:.4g} s, before the phase ends"
+                    )
+        for c in getattr(phase, "constraints", ()):
+            values = np.asarray(c.function.map(K)(X, U, p), dtype=float).ravel()
+            inner = values[1 if c.at_start else 0 : K - 1 if c.at_end else K]
+            if inner.size and np.min(inner) < -1e-6 * (1 + np.max(np.abs(values))):
+                return f"'{c.name}' fails between the nodes of phase '{phase.name}' ({c.outcome})"
+    return None
+
+
+def profiles(col: Collocation, sol: dict[str, Any]) -> list[Any]:
+    """One :class:`~gaitopt.optimize.profile.InputProfile` per step of the orbit (time since
+    that step's section)."""
+    from .profile import InputProfile
+
+    n_cycle = len(col.model.phases)
+    out = []
+    for step in range(col.problem.steps):
+        starts, lengths, values = [], [], []
+        t0 = 0.0
+        for k in range(step * n_cycle, (step + 1) * n_cycle):
+            T = float(sol["T"][k])
+            h = T / col.N
+            for j in range(col.N):
+                starts.append(t0 + j * h)
+                lengths.append(h)
+                values.append(sol["U"][k][:, j * col.d : (j + 1) * col.d])
+            t0 += T
+        out.append(
+            InputProfile.from_nodes(np.array(starts), np.array(lengths), col.tau[1:], values)
+        )
+    return out
+
+
+def feedforward_of(profs: list[Any]) -> Callable[[float, int], np.ndarray]:
+    """``feedforward(t, step)`` for :func:`gaitopt.simulate`."""
+    return lambda t, step: profs[step % len(profs)](t)
+
+
+def simulate_gait(
+    problem: GaitProblem, model: Any, x0: np.ndarray, profs: list[Any], steps: int
+) -> Simulation:
+    """Simulate ``steps`` returns from ``x0`` with the profile as feedforward (rtol 1e-12)."""
+    return simulate(
+        model,
+        x0,
+        steps=steps,
+        feedforward=feedforward_of(profs),
+        rtol=1e-12,
+        atol=1e-13,
+        max_phase_time=problem.max_phase_time,
+    )
+
+
+def _integrand(problem: GaitProblem, phase: int) -> Callable[[np.ndarray, np.ndarray, Any], float]:
+    kind = problem.cost_kind
+    model = problem.model
+    if kind == "effort":
+        return lambda x, u, p: float(np.dot(u, u))
+    if kind in ("work", "cot"):
+        rates = model.input_rates(phase)
+        return lambda x, u, p: float(
+            np.sum(np.maximum(0.0, u * np.asarray(rates(x, p), dtype=float).ravel()))
+        )
+    n, n_u = model.phases[phase].n, len(model.inputs)
+    xs, us, ps = ca.MX.sym("x", n), ca.MX.sym("u", n_u), ca.MX.sym("p", len(model.p))
+    f = ca.Function("integrand", [xs, us, ps], [problem.cost(xs, us, ps)])
+    return lambda x, u, p: float(f(x, u, p))
+
+
+def simulated_cost(problem: GaitProblem, model: Any, sim: Simulation, profs: list[Any]) -> float:
+    """The cost of a simulated orbit by composite Gauss–Legendre quadrature (64 panels of 8
+    points per phase; the positive part of the power is evaluated pointwise)."""
+    nodes, weights = np.polynomial.legendre.leggauss(8)
+    p = model.p
+    total = 0.0
+    section_times = list(sim.section_times)
+    distance = 0.0
+    for arc in sim.arcs:
+        f = _integrand(problem, arc.phase)
+        step = max(int(np.searchsorted(section_times, arc.t0, side="right")) - 1, 0)
+        t_sec = section_times[step]
+        edges = np.linspace(arc.t0, arc.t1, 65)
+        for a, b in zip(edges[:-1], edges[1:], strict=True):
+            ts = (a + b) / 2 + (b - a) / 2 * nodes
+            xs = arc.solution(ts)
+            for tt, xx, ww in zip(ts, xs.T, weights, strict=True):
+                u = profs[step % len(profs)](tt - t_sec)
+                total += (b - a) / 2 * ww * f(xx, u, p)
+    if problem.cost_kind == "cot":
+        for event in sim.events:
+            if event.state_after is None:
+                continue
+            vec = problem.step_vector(event.phase, event.state_before, p)
+            if vec is not None:
+                distance += float(np.linalg.norm(np.asarray(vec, dtype=float)))
+        mass = float(problem.total_mass(p))
+        gravity = float(problem.gravity(ca.DM(p)))
+        return total / (mass * gravity * distance)
+    return total
+
+
+def map_jacobian_fd(
+    problem: GaitProblem, model: Any, s_star: np.ndarray, profs: list[Any], h: float = 1e-6
+) -> np.ndarray | None:
+    """``∂P/∂s`` by central differences of the simulated return map (``steps`` returns), with
+    the input as a feedforward; None if a perturbed simulation does not complete."""
+    m = s_star.size
+    A = np.zeros((m, m))
+    for j in range(m):
+        cols = []
+        for sign in (1.0, -1.0):
+            s = s_star.copy()
+            s[j] += sign * h
+            sim = simulate_gait(problem, model, model.lift(s), profs, problem.steps)
+            if not sim.success:
+                return None
+            cols.append(model.section_coordinates_of(sim.section_states[-1]))
+        A[:, j] = (cols[0] - cols[1]) / (2 * h)
+    return A
