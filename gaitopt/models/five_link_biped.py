@@ -71,9 +71,13 @@ Then the legs swap: ``(q1, …, q5)⁺ = (q5, q4, q3, q2, q1)`` and likewise the
 OptimTraj also requires (``autoGen_cst_footVel``) the swing foot to move *down* just before heel
 strike and the new swing foot to move *up* just after it; here both are the guard's rate
 ``ḣ = ∇h · ẋ`` (it depends on ``q̇`` only): ``ḣ(x⁻) < 0`` and ``ḣ(x⁺) > 0`` at the post-impact
-state (the tests check the signs at a constructed impact).  Neither is enforced by the model:
-they are the optimiser's gait constraints.  Foot scuffing in mid-swing and joint limits are not
-modelled either; the declared limits below (OptimTraj's bounds) are for the optimiser.
+state (the tests check the signs at a constructed impact).  The first is the guard's direction
+(heel strike fires only on a downward crossing); the second is the ``at_start`` rule of the
+unilateral constraint *swing foot above the ground* (``h ≥ 0`` throughout the step, which also
+forbids a mid-swing scuff; OptimTraj imposes no clearance along the step).  A second constraint
+requires the stance foot to push, ``N = n · Σ m_i (r̈_i + g ŷ) ≥ 0``; friction is not modelled.
+The joint limits (OptimTraj's bounds, declared below) and OptimTraj's optional knee limits
+(:attr:`FiveLinkBiped.knee_flexion`) are not imposed by the model: they are an optimiser's.
 
 **Exits** (terminal): a *fall*, the hip reaching the ground line (``n·P2`` falling through 0);
 a *torso fall*, the torso reaching horizontal (``cos q3`` falling through 0, the edge of
