@@ -14,6 +14,7 @@ from .curves import Curve, ParameterPath, bifurcation_curve
 from .errors import GaitoptInputError, GuessError, ParameterError, StateError, UnknownModelError
 from .hybrid import HybridModel, Phase, Section, Transition
 from .models import REGISTRY, model
+from .optimize import OptimalGait, optimize_gait
 from .result import LimitCycle, OrbitArc
 from .shooting import MultipleShooting, find_limit_cycle
 from .simulation import Simulation, simulate
@@ -33,6 +34,8 @@ __all__ = [
     "LimitCycle",
     "OrbitArc",
     "simulate",
+    "optimize_gait",
+    "OptimalGait",
     "Simulation",
     "HybridModel",
     "Phase",
