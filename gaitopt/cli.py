@@ -42,6 +42,7 @@ from typing import Any, NoReturn
 
 import numpy as np
 
+from . import cli_optimize
 from .continuation import Branch, continuation
 from .errors import GaitoptInputError, GuessError, ParameterError, StateError, did_you_mean
 from .files import jsonable
@@ -895,6 +896,7 @@ SUBCOMMANDS: dict[str, Subcommand] = {
         _continue_arguments,
         run_continue,
     ),
+    "optimize": Subcommand(cli_optimize.HELP, cli_optimize.add_arguments, cli_optimize.run),
 }
 
 

@@ -155,8 +155,8 @@ class OptimalGait:
             "speed": self.speed,
             "fixed_point": self.fixed_point,
             "inputs": self.inputs,
-            "multipliers": list(self.multipliers),
-            "multipliers_fd": list(self.multipliers_fd),
+            "multipliers": [complex(m) for m in self.multipliers],  # [re, im] in JSON
+            "multipliers_fd": [complex(m) for m in self.multipliers_fd],
             "stable": self.stable,
             "verified": self.verified,
             "verification": self.verification,

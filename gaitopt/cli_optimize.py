@@ -1,0 +1,219 @@
+"""``gaitopt optimize``: synthesise an optimal actuated gait.
+
+::
+
+    gaitopt optimize MODEL [--set NAME=VALUE ...] [--cost effort|work|cot] [--fix period=S]
+                           [--fix step_length=M] [--fix speed=V] [--bound INPUT=MAX ...]
+                           [--free PARAM ...] [--steps K] [--starts N] [--seed S] [--json]
+                           [--out DIR]
+
+``--json`` prints one object: ``model``, ``params``, ``success``, ``message``, ``cost_kind``,
+``cost``, ``period``, ``step_length``, ``speed``, ``fixed_point``, ``inputs`` (``{"time": [...],
+INPUT: [...]}`` over one orbit), ``multipliers`` (``[re, im]``), ``stable``, ``verified``,
+``discretisation_error``, ``active_constraints`` and, with ``--starts`` > 1, ``minima``.  Bounds
+the model declares (``input_bounds``, ``state_bounds``: the five-link biped's |u| ≤ 100 N·m,
+|q| ≤ π/2, |q̇| ≤ 10) apply unless ``--bound`` overrides an input's.  ``--out DIR`` writes
+``optimal.json``, ``inputs.csv``, ``orbit.png``, ``inputs.png`` and ``gait.gif``.  Exit status
+0 optimal gait found and verified, 1 none (the JSON is still printed), 2 bad input.
+
+The command-line helpers come from :mod:`gaitopt.cli` (imported when called, since that module
+registers this one in its ``SUBCOMMANDS``).
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from .errors import GaitoptInputError, did_you_mean
+
+__all__ = ["add_arguments", "run", "HELP"]
+
+HELP = "synthesise an optimal gait (least effort, work or cost of transport) with input profiles"
+_FIXABLE = ("period", "step_length", "speed")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Declare the arguments of ``gaitopt optimize``."""
+    from .cli import _count, _model_arguments
+
+    _model_arguments(parser)
+    parser.add_argument(
+        "--cost",
+        choices=("effort", "work", "cot"),
+        default="effort",
+        help="∫Σu² dt (default), positive actuator work, or cost of transport",
+    )
+    parser.add_argument(
+        "--fix",
+        action="append",
+        metavar="NAME=VALUE",
+        help="fix period=S (s), step_length=M (m) or speed=V (m/s); repeatable",
+    )
+    parser.add_argument(
+        "--bound",
+        action="append",
+        metavar="INPUT=MAX",
+        help="|INPUT| <= MAX at every collocation point (input units); repeatable",
+    )
+    parser.add_argument(
+        "--free", action="append", metavar="PARAM", help="optimise this parameter too"
+    )
+    parser.add_argument("--steps", type=_count(1), default=1, help="steps per orbit (default 1)")
+    parser.add_argument(
+        "--starts", type=_count(1), default=1, help="seeded multi-start (default 1)"
+    )
+    parser.add_argument("--seed", type=int, default=0, help="seed of the multi-start (default 0)")
+    parser.add_argument("--out", metavar="DIR", help="write JSON, CSV and figures to DIR")
+
+
+def _parse(args: argparse.Namespace, model: Any) -> dict[str, Any]:
+    from .cli import InputError, _assignments
+
+    fixed = _assignments(
+        "--fix", args.fix, {"period": "period=0.8", "step_length": "step_length=0.3"}
+    )
+    for name, (item, value) in fixed.items():
+        if name not in _FIXABLE:
+            raise InputError(
+                f"--fix {item}: {name!r} cannot be fixed; {did_you_mean(name, _FIXABLE)}"
+                f"choose from {', '.join(_FIXABLE)}, e.g. --fix period=0.8"
+            )
+        if not value > 0:
+            raise InputError(f"--fix {item}: must be positive, e.g. --fix {name}=0.8")
+    examples = {n: f"{n}=10" for n in model.inputs} or {"INPUT": "INPUT=10"}
+    bounds = {
+        n: max(abs(lo), abs(hi)) for n, (lo, hi) in dict(getattr(model, "input_bounds", {})).items()
+    }
+    for name, (item, value) in _assignments("--bound", args.bound, examples).items():
+        if name not in model.inputs:
+            raise InputError(
+                f"--bound {item}: {model.name} has no input {name!r}; "
+                f"{did_you_mean(name, model.inputs)}inputs: {', '.join(model.inputs) or 'none'}"
+            )
+        if not value > 0:
+            raise InputError(f"--bound {item}: the bound must be positive, e.g. --bound {name}=10")
+        bounds[name] = value
+    free = tuple(args.free or ())
+    for name in free:
+        if name not in model.params:
+            raise InputError(
+                f"--free {name}: {model.name} has no parameter {name!r}; "
+                f"{did_you_mean(name, model.params)}parameters: {', '.join(model.params)}"
+            )
+    return {
+        **{name: value for name, (_, value) in fixed.items()},
+        "bounds": bounds,
+        "state_bounds": dict(getattr(model, "state_bounds", {})),
+        "free": free,
+    }
+
+
+def run(args: argparse.Namespace) -> int:
+    """``gaitopt optimize``: the optimal gait, verified by simulation, with its multipliers."""
+    from .cli import (
+        EXIT_NOT_FOUND,
+        EXIT_OK,
+        InputError,
+        _print_json,
+        _solver_output_to_stderr,
+        build_model,
+    )
+    from .optimize import optimize_gait
+
+    model = build_model(args.model, args.set)
+    options = _parse(args, model)
+    try:
+        with _solver_output_to_stderr():
+            gait = optimize_gait(
+                model,
+                args.cost,
+                steps=args.steps,
+                starts=args.starts,
+                seed=args.seed,
+                **options,
+            )
+    except GaitoptInputError as exc:
+        raise InputError(str(exc)) from None
+    report = gait.to_json(minima=args.starts > 1)
+    if args.out:
+        _write(gait, report, Path(args.out))
+    if args.json:
+        _print_json(report)
+    else:
+        _print(report)
+    return EXIT_OK if gait.success else EXIT_NOT_FOUND
+
+
+def _print(report: dict[str, Any]) -> None:
+    from .cli import _print_rows
+
+    rows = [
+        ("model", report["model"]),
+        ("success", report["success"]),
+        ("message", report["message"]),
+        (f"cost ({report['cost_kind']})", report["cost"]),
+        ("period (s)", report["period"]),
+        ("step length (m)", report["step_length"]),
+        ("speed (m/s)", report["speed"]),
+        ("fixed point", report["fixed_point"]),
+        ("multipliers", report["multipliers"]),
+        ("stable", report["stable"]),
+        ("discretisation error", report["discretisation_error"]),
+        ("active constraints", ", ".join(report["active_constraints"]) or "none"),
+    ]
+    for i, m in enumerate(report.get("minima", [])):
+        rows.append((f"minimum {i + 1}", f"cost {m['cost']:.10g}, starts {m['starts']}"))
+    _print_rows(rows)
+
+
+def _write(gait: Any, report: dict[str, Any], folder: Path) -> None:
+    """optimal.json, inputs.csv, orbit.png, inputs.png, gait.gif (each written atomically)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .animation import animate_walker
+    from .files import write_csv, write_json
+    from .optimize.verify import feedforward_of
+    from .plotting import save_figure
+    from .simulation import simulate
+
+    folder.mkdir(parents=True, exist_ok=True)
+    write_json(report, folder / "optimal.json")
+    if not gait.inputs:
+        return
+    names = list(gait.model.inputs)
+    time = gait.inputs["time"]
+    rows = zip(time, *[gait.inputs[n] for n in names], strict=True)
+    write_csv(["time_s", *names], rows, folder / "inputs.csv")
+    units = dict(zip(names, gait.model.input_units or ("",) * len(names), strict=False))
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for n in names:
+        ax.plot(time, gait.inputs[n], label=f"{n} ({units.get(n, '')})")
+    ax.set_xlabel("time since heel strike t (s)")
+    ax.set_ylabel("input u(t) (N·m)")
+    ax.set_title(f"{gait.model.title}: optimal input, {gait.cost_kind} {gait.cost:.6g}")
+    ax.legend(fontsize=8)
+    save_figure(fig, folder / "inputs.png")
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for arc in gait.orbit:
+        for j, state in enumerate(arc.states):
+            ax.plot(arc.t, arc.x[j], label=state if arc is gait.orbit[0] else None)
+    ax.set_xlabel("time since heel strike t (s)")
+    ax.set_ylabel("state x (rad, rad/s)")
+    ax.set_title(f"{gait.model.title}: optimal orbit over one period")
+    ax.legend(fontsize=7, ncol=2)
+    save_figure(fig, folder / "orbit.png")
+
+    if gait.success:
+        x0 = gait.model.state_vector(gait.fixed_point)
+        sim = simulate(
+            gait.model, x0, steps=3, feedforward=feedforward_of(gait.profiles), rtol=1e-10
+        )
+        if sim.success and all(ph.points is not None for ph in gait.model.phases):
+            animate_walker(gait.model, sim, folder / "gait.gif")
