@@ -44,6 +44,36 @@ def rate_along(flow: ca.Function, g: ca.Function) -> ca.Function:
     return _RATES[key][0]
 
 
+def _implicit_dynamics(model: Any) -> ca.Function | None:
+    """The model's equations of motion in implicit form, if it declares them.
+
+    A mechanical model whose states are ``(q, q̇)`` may provide the classmethod
+    ``manipulator() -> Function(q, qd, u, p) -> (M, rhs)`` with ``M(q) q̈ = rhs(q, q̇, u)``
+    (the five-link biped does).  Collocating ``M a = rhs`` with the accelerations ``a`` as
+    unknowns keeps the NLP's expressions small (no symbolic inverse of ``M``); the flow is
+    checked against it at a test point, and ignored if they differ."""
+    factory = getattr(type(model), "manipulator", None)
+    if factory is None:
+        return None
+    phase = model.phases[0]
+    n = phase.n
+    try:
+        f = factory()
+        if n % 2 or f.size1_in(0) != n // 2 or f.size1_in(1) != n // 2:
+            return None
+        x = np.linspace(0.1, 0.3, n)
+        u = np.linspace(-0.2, 0.2, len(model.inputs))
+        M, rhs = (np.asarray(v, dtype=float) for v in f(x[: n // 2], x[n // 2 :], u, model.p))
+        explicit = np.asarray(phase.flow(x, u, model.p), dtype=float).ravel()
+        if not np.allclose(np.linalg.solve(M, rhs).ravel(), explicit[n // 2 :], rtol=1e-9):
+            return None
+        if not np.allclose(explicit[: n // 2], x[n // 2 :]):
+            return None
+    except (RuntimeError, np.linalg.LinAlgError):
+        return None
+    return f
+
+
 @dataclass(frozen=True)
 class RadauMesh:
     """Mesh of the transcription: ``intervals`` per phase, Radau ``degree`` per interval."""
@@ -177,6 +207,7 @@ class Collocation:
         states0 = phases[0].states
         self.section_index = [states0.index(c) for c in section.coordinates]
 
+        self.implicit = _implicit_dynamics(model) if len(phases) == 1 else None
         B = _Blocks()
         self.blocks = B
         lo0, hi0 = problem.state_bounds_of(0)
@@ -202,6 +233,8 @@ class Collocation:
             X.append(Xk)
             U.append(B.add(f"U{k}", n_u, N * d, ulo, uhi))
             T.append(B.add(f"T{k}", 1, 1, 1e-3, problem.max_phase_time))
+            if self.implicit is not None:
+                B.add(f"A{k}", n // 2, N * d)
             if work:
                 Pp.append(B.add(f"Pplus{k}", n_u, N * d, 0.0, np.inf))
                 Pm.append(B.add(f"Pminus{k}", n_u, N * d, 0.0, np.inf))
@@ -228,7 +261,16 @@ class Collocation:
             Xk, Uk, Tk = X[k], U[k], T[k]
             h = Tk / N
             Xc = Xk[:, 1:]
-            F = phase.flow.map(N * d)(Xc, Uk, p)
+            if self.implicit is None:
+                F = phase.flow.map(N * d)(Xc, Uk, p)
+            else:  # ẋ = (q̇, a) with M(q) a = rhs(q, q̇, u) as constraints
+                nq = phase.n // 2
+                Ak = B.syms[B.names.index(f"A{k}")]
+                M, rhs = self.implicit.map(N * d)(Xc[:nq, :], Xc[nq:, :], Uk, p)
+                Ms = ca.horzsplit(M, nq)
+                balance = [ca.mtimes(Ms[c], Ak[:, c]) - rhs[:, c] for c in range(N * d)]
+                add(f"equations of motion ({label})", ca.horzcat(*balance))
+                F = ca.vertcat(Xc[nq:, :], Ak)
             defects = []
             for j in range(N):
                 Xi = Xk[:, j * d : j * d + d + 1]
@@ -404,6 +446,10 @@ class Collocation:
             B.put(w, f"X{k}", Xk[:, 1:] if k == 0 else Xk)
             B.put(w, f"U{k}", Uk)
             B.put(w, f"T{k}", durations[k])
+            if self.implicit is not None:
+                flow = self.model.phases[i].flow.map(Xk.shape[1] - 1)
+                rates = np.asarray(flow(Xk[:, 1:], Uk, p), dtype=float)
+                B.put(w, f"A{k}", rates[Xk.shape[0] // 2 :])
             if work:
                 rates = np.asarray(
                     self.model.input_rates(i).map(Xk.shape[1] - 1)(Xk[:, 1:], p), dtype=float

@@ -12,7 +12,7 @@ with ``success=False`` naming the constraint that cannot be met.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import casadi as ca
@@ -64,7 +64,7 @@ def optimize_gait(
     state_bounds: dict[str, tuple[float, float]] | None = None,
     free: tuple[str, ...] | str = (),
     steps: int = 1,
-    starts: int = 1,
+    starts: int | Sequence[int] = 1,
     seed: int = 0,
     mesh: RadauMesh | None = None,
     tol: float = 1e-8,
@@ -90,10 +90,11 @@ def optimize_gait(
         Parameters to optimise too, within their declared ranges.
     steps : int
         Returns to the section per orbit.
-    starts : int
-        Number of seeded starts (start 0 from the model's default start, the others perturbed
-        with ``numpy.random.default_rng([seed, start])``); every distinct local minimum is
-        reported in ``minima``.
+    starts : int or sequence of int
+        Number of seeded starts (start 0 from the model's default start, start ``j`` perturbed
+        with ``numpy.random.default_rng([seed, j])``), or the indices of the starts to run (to
+        re-run a given start alone); every distinct local minimum is reported in ``minima``
+        with the starts that reached it.
     seed : int
         Seed of the multi-start.
     mesh : RadauMesh, optional
@@ -121,11 +122,28 @@ def optimize_gait(
         free=free,
         steps=steps,
     )
-    if not isinstance(starts, int) or starts < 1:
-        raise GaitoptInputError(f"`starts` must be a positive integer, got {starts!r}; e.g. 4")
+    indices = _start_indices(starts)
     return solve_problem(
-        problem, starts=starts, seed=seed, mesh=mesh, tol=tol, verify=verify, guess=guess
+        problem, starts=indices, seed=seed, mesh=mesh, tol=tol, verify=verify, guess=guess
     )
+
+
+def _start_indices(starts: int | Sequence[int]) -> list[int]:
+    """``starts`` as a list of start indices (an int ``N`` means ``0 … N − 1``)."""
+    if isinstance(starts, (int, np.integer)) and not isinstance(starts, bool):
+        if starts < 1:
+            raise GaitoptInputError(f"`starts` must be a positive integer, got {starts!r}; e.g. 4")
+        return list(range(int(starts)))
+    try:
+        indices = [int(i) for i in starts]  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        indices = []
+    if not indices or any(i < 0 for i in indices) or len(set(indices)) != len(indices):
+        raise GaitoptInputError(
+            f"`starts` must be a positive integer or distinct start indices >= 0, got "
+            f"{starts!r}; e.g. starts=4 or starts=[0, 3]"
+        )
+    return indices
 
 
 def _solver(col: Collocation) -> ca.Function:
@@ -285,7 +303,7 @@ def _converged(stats: dict[str, Any]) -> bool:
 def solve_problem(
     problem: GaitProblem,
     *,
-    starts: int = 1,
+    starts: int | Sequence[int] = 1,
     seed: int = 0,
     mesh: RadauMesh | None = None,
     tol: float = 1e-8,
@@ -298,8 +316,9 @@ def solve_problem(
     p = model.p
     mesh = mesh or DEFAULT_MESH
     col = Collocation(problem, mesh)
+    indices = _start_indices(starts)
     runs = []
-    for start in range(starts):
+    for start in indices:
         w0 = _start_guess(col, problem, start, seed, guess)
         w, stats = _run(col, w0, p)
         ok = _converged(stats) and np.all(np.isfinite(w))
@@ -394,7 +413,7 @@ def solve_problem(
     if len(runs) > 1:
         result.message += (
             f"; {len(minima)} distinct local minim{'um' if len(minima) == 1 else 'a'} from "
-            f"{starts} starts ({sum(not r['ok'] for r in runs)} did not converge)"
+            f"{len(runs)} starts ({sum(not r['ok'] for r in runs)} did not converge)"
         )
     result.solve_time = time.perf_counter() - t_start
     return result
