@@ -9,9 +9,18 @@ systems — multiple shooting with CasADi, Floquet multipliers, return maps, sim
 
 from __future__ import annotations
 
+from importlib import metadata as _metadata
+
 from .continuation import Branch, PseudoArclength, SpecialPoint, continuation
 from .curves import Curve, ParameterPath, bifurcation_curve
-from .errors import GaitoptInputError, GuessError, ParameterError, StateError, UnknownModelError
+from .errors import (
+    FrozenModelError,
+    GaitoptInputError,
+    GuessError,
+    ParameterError,
+    StateError,
+    UnknownModelError,
+)
 from .hybrid import HybridModel, Phase, Section, Transition
 from .models import REGISTRY, model
 from .optimize import OptimalGait, optimize_gait
@@ -46,5 +55,9 @@ __all__ = [
     "ParameterError",
     "StateError",
     "GuessError",
+    "FrozenModelError",
 ]
-__version__ = "0.1.0"
+try:  # the one source of the version: the installed package's metadata (pyproject.toml)
+    __version__ = _metadata.version("gaitopt")
+except _metadata.PackageNotFoundError:  # running from a source tree that is not installed
+    __version__ = "0+unknown"

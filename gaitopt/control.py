@@ -62,6 +62,7 @@ __all__ = [
     "closed_loop",
     "ControlDesignError",
     "NoGaitError",
+    "check_section_point",
     "ClosedLoopRun",
     "GeneratedPolicy",
 ]
@@ -86,6 +87,44 @@ class NoGaitError(RuntimeError):
     def __init__(self, message: str, cycle: LimitCycle | None = None):
         super().__init__(message)
         self.cycle = cycle
+
+
+def check_section_point(
+    model: HybridModel, state: Mapping[str, float], argument: str, label: str | None = None
+) -> None:
+    """A section point asked for (a target, a start) must exist at the model's parameters.
+
+    A model whose section ends at a closed-form limit says so with a ``highest_apex()`` method:
+    the SLIP's apex height ``z`` cannot exceed the energy height ``E/(m g)``, where no forward
+    speed is left (``ẋ = sqrt(2 (E/m − g z))``); a state above it has more energy than the model
+    and is bad input, not a gait or a decision that fails.
+
+    Parameters
+    ----------
+    model : HybridModel
+    state : mapping
+        Section coordinates by name.
+    argument : str
+        The argument's name, for the message.
+    label : str, optional
+        What the message starts with instead of ```argument` z=VALUE`` (the CLI: ``--from z=10``).
+
+    Raises
+    ------
+    ControlDesignError
+        Naming ``argument``, the value and the limit.
+    """
+    top = getattr(model, "highest_apex", None)
+    if not callable(top) or "z" not in state:
+        return
+    z, limit = float(state["z"]), float(top())
+    if z > limit:
+        label = f"`{argument}` z={z:g}" if label is None else label
+        raise ControlDesignError(
+            f"{label}: an apex {z:g} m high is above the energy height E/(m g) = "
+            f"{limit:.6g} m (energy {model.energy:g} J), where no forward speed is left; give "
+            f"z < {limit:.6g} or raise `energy`"
+        )
 
 
 # -- the linearised map -------------------------------------------------------------------------
@@ -169,6 +208,8 @@ def linearise(
         _require_inputs(cycle.model)
     else:
         _require_inputs(model)
+        if target is not None:
+            check_section_point(model, target, "target")
         cycle = find_limit_cycle(model, guess, inputs=inputs)
         if target is not None:
             if not cycle.success:
@@ -349,7 +390,8 @@ class StepController:
 
     def _section(self, state) -> np.ndarray:
         model = self.model
-        if isinstance(state, Mapping):
+        if isinstance(state, Mapping):  # a state typed in: it must exist (simulated ones do)
+            check_section_point(model, state, "state")
             return model.section_vector(state)
         v = np.asarray(state, dtype=float).ravel()
         if v.size == len(model.state_names) and v.size != len(model.section.coordinates):

@@ -8,6 +8,7 @@ All input errors subclass :class:`ValueError` (as python-control's ``ControlDime
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 from collections.abc import Iterable
 
@@ -17,8 +18,25 @@ __all__ = [
     "ParameterError",
     "StateError",
     "GuessError",
+    "FrozenModelError",
     "did_you_mean",
+    "MAX_ORBIT_STEPS",
+    "MAX_SIMULATION_STEPS",
 ]
+
+#: Largest number of returns to the section per periodic orbit (``steps`` of
+#: :func:`gaitopt.find_limit_cycle`, ``--steps`` of ``solve`` and ``continue``, ``--max-period``).
+#: The shooting system grows with the period: a period-64 kneed-walker orbit already takes about
+#: 10 s and 0.5 GB to build and solve on one core, and the cost grows faster than linearly (a
+#: period-1000 request ran for minutes and took 14 GB).  Period doubling cascades are resolved
+#: far below this (the compass gait's chaos sets in by period 16).
+MAX_ORBIT_STEPS = 64
+
+#: Largest number of steps of one simulation (``steps`` of :func:`gaitopt.simulate`,
+#: ``--steps`` of ``simulate``): about 40 s and 0.3 GB for the compass gait (4 ms and 20 kB a
+#: step, every arc's dense output kept).  Simulate longer runs in pieces, each starting from the
+#: last state of the one before.
+MAX_SIMULATION_STEPS = 10_000
 
 
 def did_you_mean(word: str, choices: Iterable[str]) -> str:
@@ -27,7 +45,7 @@ def did_you_mean(word: str, choices: Iterable[str]) -> str:
     Whole names are compared first, then their ``_``-separated parts, so that ``walkr`` finds
     both ``simplest_walker`` and ``kneed_walker``.
     """
-    choices = list(choices)
+    word, choices = str(word), [str(c) for c in choices]
     close = difflib.get_close_matches(word, choices, n=2)
     if not close:
         matches = difflib.get_close_matches(
@@ -55,3 +73,8 @@ class StateError(GaitoptInputError):
 
 class GuessError(GaitoptInputError):
     """An initial guess from which the model never reaches its next transition."""
+
+
+class FrozenModelError(dataclasses.FrozenInstanceError):
+    """Assigning to a model's attribute: models are immutable (their functions are shared); the
+    message says how to make a model with another parameter value."""

@@ -13,14 +13,24 @@ import contextlib
 import json
 import math
 import os
+import tempfile
 import uuid
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-__all__ = ["replaced_atomically", "jsonable", "write_json", "write_csv"]
+from .errors import GaitoptInputError
+
+__all__ = [
+    "replaced_atomically",
+    "jsonable",
+    "write_json",
+    "write_csv",
+    "check_output_folder",
+    "write_or_fall_back",
+]
 
 
 @contextlib.contextmanager
@@ -149,3 +159,94 @@ def write_csv(
                 ]
             )
     return path
+
+
+def check_output_folder(folder: str | os.PathLike) -> Path:
+    """Check, before any work, that ``folder`` is or can become a writable directory.
+
+    Nothing is created: the directory is made when the results are written.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        An existing directory, or a path whose nearest existing ancestor is a writable directory.
+
+    Returns
+    -------
+    pathlib.Path
+        ``folder``.
+
+    Raises
+    ------
+    GaitoptInputError
+        If ``folder`` is empty, an existing file, under a file (``/dev/null/x``), not writable, or
+        not a valid path; the message says which.
+    """
+    text = os.fspath(folder)
+    if not str(text).strip():
+        raise GaitoptInputError("the output folder is empty; give a directory, e.g. results/run")
+    path = Path(text)
+    try:
+        if path.exists() and not path.is_dir():
+            raise GaitoptInputError(
+                f"{text!s} is an existing file, not a directory; give a new or existing directory"
+            )
+        ancestor = path.absolute()
+        while not ancestor.exists():
+            ancestor = ancestor.parent
+        if not ancestor.is_dir():
+            raise GaitoptInputError(
+                f"{text!s} cannot be created: {ancestor} is a file, not a directory"
+            )
+        if not os.access(ancestor, os.W_OK | os.X_OK):
+            raise GaitoptInputError(f"{text!s} cannot be written: no permission in {ancestor}")
+    except (OSError, ValueError) as exc:  # a name too long, a NUL byte, ...
+        raise GaitoptInputError(f"{text!r} is not a usable directory name ({exc})") from None
+    return path
+
+
+def write_or_fall_back(
+    folder: str | os.PathLike, write: Callable[[Path], None], prefix: str = "gaitopt-"
+) -> tuple[Path, OSError | None]:
+    """Write results into ``folder``; where that fails, into a new fallback directory.
+
+    A result that took long to compute is never lost to an unwritable output path: the fallback
+    is a fresh directory (:func:`tempfile.mkdtemp`) in the temporary directory, else in the
+    current directory, whichever works first.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        The directory asked for (created with its parents if missing).
+    write : callable
+        ``write(directory)`` writes every file into ``directory``.
+    prefix : str
+        Name prefix of a fallback directory.
+
+    Returns
+    -------
+    directory : pathlib.Path
+        Where the files are.
+    error : OSError or None
+        Why ``folder`` could not be used (None if it was).
+
+    Raises
+    ------
+    OSError
+        If neither ``folder`` nor a fallback directory can be written.
+    """
+    folder = Path(folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        write(folder)
+        return folder, None
+    except OSError as exc:
+        error = exc
+    for base in (tempfile.gettempdir(), os.getcwd()):
+        try:
+            fallback = Path(tempfile.mkdtemp(prefix=prefix, dir=base))
+            write(fallback)
+            return fallback, error
+        except OSError:
+            continue
+    raise error

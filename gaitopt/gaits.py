@@ -8,7 +8,8 @@ For each model (every entry of :data:`gaitopt.REGISTRY`, or those named): find t
 from the model's default start and write, under ``OUT/<model>/``,
 
 * ``cycle.json`` — :meth:`LimitCycle.as_dict` (the object of ``gaitopt solve --json``), also
-  when the search failed (``"success": false``, with the message);
+  when the search failed (``"success": false``, with the message); without ``solve_time``, so
+  that rerunning leaves the tracked files unchanged (timings are measured by ``make bench``);
 * ``phase_portrait.png`` — the orbit's phase portrait with a simulated transient from the
   model's default start;
 * ``walking.gif`` — for models with a drawable geometry, ~4 simulated steps from the fixed point;
@@ -86,7 +87,8 @@ def run_model(name: str, out: Path) -> tuple[LimitCycle, list[str], list[str]]:
     folder = out / name
     folder.mkdir(parents=True, exist_ok=True)
     cycle = find_limit_cycle(model)
-    write_json(cycle.as_dict(), folder / "cycle.json")
+    # No solve_time: a tracked result must not change from run to run (timings: `make bench`).
+    write_json(cycle.as_dict(timing=False), folder / "cycle.json")
     written, errors = ["cycle.json"], []
     if not cycle.success:
         for stale in FIGURES:  # pictures of an earlier run would contradict cycle.json

@@ -28,7 +28,7 @@ def test_unknown_parameter_lists_the_parameters():
         ("compass_gait", {"slope": "abc"}, r"`slope` must be a number, got 'abc'"),
         ("compass_gait", {"slope": float("nan")}, r"`slope` = nan is out of range"),
         ("rimless_wheel", {"spokes": 8.5}, r"`spokes` = 8.5 is out of range; valid: integer in"),
-        ("rimless_wheel", {"spokes": 64}, r"must be below π/spokes.*at most 39 spokes"),
+        ("rimless_wheel", {"spokes": 2}, r"`spokes` = 2 is out of range"),
         ("vanderpol", {"mu": 0}, r"`mu` = 0 is out of range"),
     ],
 )
@@ -77,8 +77,8 @@ def test_guess_that_leads_nowhere():
     ("kwargs", "pattern"),
     [
         ({"method": "newtn"}, r"`method` must be one of newton, ipopt, got 'newtn'"),
-        ({"steps": 0}, r"`steps` must be a positive integer, got 0"),
-        ({"inputs": [1.0, 2.0]}, r"`inputs` must have 1 entries \(hip_torque\)"),
+        ({"steps": 0}, r"`steps` must be at least 1, got 0"),
+        ({"inputs": [1.0, 2.0]}, r"`inputs` must be 1 finite number\(s\) \(hip_torque\)"),
     ],
 )
 def test_find_limit_cycle_options(kwargs, pattern):

@@ -18,7 +18,7 @@ from .vanderpol import VanDerPol
 from .vertical_hopper import VerticalHopper
 
 __all__ = [
-    "REGISTRY", "model", "BouncingBall", "CompassGait", "KneedWalker", "LineJuggler",
+    "REGISTRY", "model", "as_model", "BouncingBall", "CompassGait", "KneedWalker", "LineJuggler",
     "FiveLinkBiped",
     "PlanarJuggler",
     "RaibertHopper",
@@ -55,6 +55,11 @@ def model(name: str, **params: float) -> HybridModel:
     ParameterError
         If a parameter is unknown, not a number, or out of range.
     """
+    if not isinstance(name, str):
+        raise UnknownModelError(
+            f"`name` must be a model name (a str), got {name!r} of type {type(name).__name__}; "
+            f"available: {', '.join(REGISTRY)}"
+        )
     if name not in REGISTRY:
         raise UnknownModelError(
             f"unknown model {name!r}; {did_you_mean(name, REGISTRY)}available: "
@@ -69,3 +74,28 @@ def model(name: str, **params: float) -> HybridModel:
                 f"parameters: {', '.join(known)}"
             )
     return cls(**params)
+
+
+def as_model(value: HybridModel | str, argument: str = "model") -> HybridModel:
+    """A model instance: ``value`` itself, or the registered model of that name at its defaults.
+
+    Parameters
+    ----------
+    value : HybridModel or str
+        A model, or a model name (``"compass_gait"``: :func:`model` with default parameters).
+    argument : str
+        The argument's name, for the error message.
+
+    Raises
+    ------
+    UnknownModelError
+        If ``value`` is neither a model nor a registered model name.
+    """
+    if isinstance(value, HybridModel):
+        return value
+    if isinstance(value, str):
+        return model(value)
+    raise UnknownModelError(
+        f"`{argument}` must be a model (e.g. gaitopt.model('compass_gait')) or a model name, "
+        f"got {value!r} of type {type(value).__name__}"
+    )

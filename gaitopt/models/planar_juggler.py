@@ -316,9 +316,21 @@ class PlanarJuggler(HybridModel):
         )
 
     def default_start(self) -> dict[str, float]:
-        """A throw 5 cm beyond x̄, drifting outwards, 20 % under the desired energy."""
-        return {
-            "x": self.desired_position + 0.05,
-            "x_dot_pre": 0.1,
-            "energy_pre": 0.8 * self.desired_energy,
-        }
+        """A throw 5 cm beyond x̄, drifting outwards at 0.1 m/s, 20 % under the desired energy.
+
+        The offsets are halved until the impact is feasible with room to spare: the paddle's tilt
+        ``κ_x (x − x̄) + κ_ẋ ẋ`` puts the impact at the height ``y = x tan ψ`` (module
+        docstring), which must leave at least half the energy for the vertical speed,
+        ``g y ≤ ½ (E − ½ ẋ²)`` (a large ``κ_ẋ`` or ``x̄`` tilts the paddle so far that the
+        nominal throw would have to hit it above its own energy height).  With no offset the
+        impact is on the horizontal paddle at ``y = 0``, always feasible.
+        """
+        energy = 0.8 * self.desired_energy
+        for k in range(40):
+            dx, dv = 0.05 * 0.5**k, 0.1 * 0.5**k
+            x = self.desired_position + dx
+            kappa = self.kappa0 + self.kappa1 * (self.desired_energy - energy)
+            psi = (self.kappa_x * dx + self.kappa_xdot * dv) / (1 + kappa)
+            if abs(psi) < 1.4 and self.gravity * x * math.tan(psi) <= 0.5 * (energy - dv**2 / 2):
+                return {"x": x, "x_dot_pre": dv, "energy_pre": energy}
+        return {"x": self.desired_position, "x_dot_pre": 0.0, "energy_pre": energy}

@@ -73,6 +73,8 @@ _RAIBERT = "Raibert 1986, Legged Robots That Balance"
 _SIZE = "illustrative, of the size of Raibert's planar one-legged machine (Raibert et al. 1984)"
 FLIGHT_STATES = ("x", "z", "phi", "x_dot", "z_dot", "phi_dot")
 STANCE_STATES = ("r", "theta", "phi", "r_dot", "theta_dot", "phi_dot")
+#: Default proportional gain of the attitude servo (N m/rad).
+_DEFAULT_K_ATTITUDE = 400.0
 #: Largest |x_f| / l0 the foot-placement law may ask for (the leg stays below the hip).
 _MAX_REACH = 0.95
 
@@ -167,7 +169,7 @@ class RaibertHopper(HybridModel):
         high=1.0,
     )
     k_attitude: float = parameter(
-        400.0,
+        _DEFAULT_K_ATTITUDE,
         unit="N m/rad",
         doc="proportional gain k_p of the stance attitude servo τ = −k_p φ − k_v φ̇",
         source="sqrt(k_p/J) = 28 rad/s: the servo settles within a stance (ω T_s = 4.4)",
@@ -392,6 +394,13 @@ class RaibertHopper(HybridModel):
         return (descent, stance, ascent), section
 
     def check(self) -> None:
+        if self.k_attitude == 0:
+            raise ParameterError(
+                "raibert_hopper: `k_attitude` = 0 leaves the body pitch without a restoring "
+                "torque (τ = −k_v φ̇ only, and nothing else depends on φ): every pitch φ is then "
+                "a gait, a continuous family with a multiplier exactly 1 and no isolated orbit "
+                f"to find; give k_attitude > 0 (default {_DEFAULT_K_ATTITUDE:g} N m/rad)"
+            )
         if self.thrust == 0 and self.damping == 0:
             raise ParameterError(
                 "raibert_hopper: `thrust` = 0 and `damping` = 0 make the leg force zero at "
