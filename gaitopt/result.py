@@ -125,29 +125,45 @@ class LimitCycle:
         """The fixed point in section coordinates."""
         return np.array([self.fixed_point[k] for k in self.section_coordinates])
 
-    def as_dict(self) -> dict[str, Any]:
-        """The JSON object of ``gaitopt solve --json`` (see DESIGN.md, public contract)."""
-        return {
+    def as_dict(self, timing: bool = True) -> dict[str, Any]:
+        """The JSON object of ``gaitopt solve --json`` (the public contract in the README).
+
+        Numbers that do not exist are ``None`` (JSON ``null``): the ``period`` unless every phase
+        duration is positive and finite (a failed search has no period), non-finite values.
+
+        Parameters
+        ----------
+        timing : bool
+            Include ``solve_time`` (wall-clock seconds, different on every run); tracked result
+            files (``make gaits``) leave it out so that a rerun leaves them unchanged.
+        """
+        durations = np.asarray(self.durations, dtype=float).ravel()
+        has_period = bool(
+            durations.size and np.all(np.isfinite(durations)) and np.all(durations > 0)
+        )
+        out = {
             "model": self.model.name,
             "params": self.model.params,
             "success": bool(self.success),
             "message": self.message,
-            "period": _num(self.period),
+            "period": _num(self.period) if has_period else None,
             "steps": int(self.steps),
             "state_names": list(self.state_names),
             "fixed_point": {k: _num(v) for k, v in self.fixed_point.items()},
-            "multipliers": [[float(z.real), float(z.imag)] for z in self.multipliers],
+            "multipliers": [[_num(z.real), _num(z.imag)] for z in self.multipliers],
             "stable": self.stable,
             "residual": _num(self.residual),
             "verified": bool(self.verified),
             "section_coordinates": list(self.section_coordinates),
             "inputs": dict(zip(self.model.inputs, map(float, self._input_values()), strict=True)),
-            "durations": [float(d) for d in self.durations],
+            "durations": [_num(d) for d in durations],
             "verification_error": _num(self.verification_error),
             "discretisation_error": _num(self.discretisation_error),
             "iterations": int(self.iterations),
-            "solve_time": _num(self.solve_time),
         }
+        if timing:
+            out["solve_time"] = _num(self.solve_time)
+        return out
 
     def _input_values(self) -> np.ndarray:
         n = len(self.model.inputs)
