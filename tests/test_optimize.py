@@ -86,8 +86,10 @@ def test_simulation_with_the_profile_reproduces_the_cost(level):
 
 def test_multipliers_two_ways(level):
     _, gait = level
-    # AD through the transcription vs central differences (h = 1e-5) of the simulated map
-    # (rtol 1e-12): FD truncation ~h² and integrator noise ~rtol/h, both below 1e-6.
+    # AD through the transcription vs central differences (h = 1e-6) of the simulated map
+    # (rtol 1e-12).  The held input makes the map's second derivative jump at the orbit (a
+    # longer step sees the last value, a shorter one the polynomial), so the FD error is O(h)
+    # plus integrator noise ~rtol/h: ~1e-6.
     ad = np.sort_complex(gait.multipliers)
     fd = np.sort_complex(gait.multipliers_fd)
     assert ad.size == 3 and fd.size == 3

@@ -153,7 +153,7 @@ def simulated_cost(problem: GaitProblem, model: Any, sim: Simulation, profs: lis
 
 
 def map_jacobian_fd(
-    problem: GaitProblem, model: Any, s_star: np.ndarray, profs: list[Any], h: float = 1e-5
+    problem: GaitProblem, model: Any, s_star: np.ndarray, profs: list[Any], h: float = 1e-6
 ) -> np.ndarray | None:
     """``∂P/∂s`` by central differences of the simulated return map (``steps`` returns), with
     the input as a feedforward; None if a perturbed simulation does not complete."""
