@@ -132,12 +132,26 @@ class LineJuggler(HybridModel):
             doc=f"b < −{DROP_DEPTH:g} m: the impact knocked the ball down, e + (1 + e) κ ≤ 0",
         )
         energy = sym.conserved("energy", x, 0.5 * v**2 + g * b)  # per unit mass (J/kg)
+        # The ball stays above the paddle between impacts, b − r = b (1 + κ) ≥ 0: zero at the
+        # impact that starts the flight (it must rise at once: the paddle throws it up) and at the
+        # impact that ends it.
+        above = sym.constraint(
+            "ball above the paddle",
+            x,
+            b * (1 + k),
+            "ball below the paddle",
+            at_start=True,
+            at_end=True,
+            unit="m",
+            source="the paddle is solid (Buehler et al. 1990)",
+        )
         flight = Phase(
             "flight",
             ("b", "v", "b_dot"),
             flow,
             (impact, dropped),
             {"energy": energy},
+            constraints=(above,),
         )
         s = ca.SX.sym("s", 1)
         section = Section(
