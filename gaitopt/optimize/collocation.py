@@ -252,7 +252,7 @@ class Collocation:
             ubg.append(np.full(expr.shape[0], high))
             self.groups.append(Group(name, start, expr.shape[0], low == high))
 
-        cost_terms, work_terms, distance = [], [], []
+        cost_terms, work_terms, effort_terms, distance = [], [], [], []
         step_vectors = []
         for k, i in enumerate(self.chain):
             phase = phases[i]
@@ -325,6 +325,7 @@ class Collocation:
                 power = Uk * rates
                 add(f"power split ({label})", Pp[k] - Pm[k] - power)
                 work_terms.append(h * ca.mtimes(ca.sum1(Pp[k]), wq))
+                effort_terms.append(h * ca.mtimes(ca.sum1(Uk**2), wq))
             else:
                 L = ca.vertcat(*[problem.integrand(i, Xc[:, c], Uk[:, c], p) for c in range(N * d)])
                 cost_terms.append(h * ca.mtimes(L.T, wq))
@@ -348,7 +349,12 @@ class Collocation:
             J = ca.sum1(ca.vertcat(*cost_terms))
         w = B.vector()
         self._w, self._p = w, p_in
-        self.nlp = {"x": w, "p": p_in, "f": J, "g": ca.vertcat(*g)}
+        objective = J
+        if work and problem.regularisation > 0:
+            # Positive work alone leaves singular arcs (inputs that chatter between the nodes);
+            # a small effort term selects a smooth optimum.  The reported cost is J alone.
+            objective = J + problem.regularisation * ca.sum1(ca.vertcat(*effort_terms))
+        self.nlp = {"x": w, "p": p_in, "f": objective, "g": ca.vertcat(*g)}
         self.lbx = np.concatenate(B.lb)
         self.ubx = np.concatenate(B.ub)
         self.lbg = np.concatenate(lbg)

@@ -87,6 +87,10 @@ class GaitProblem:
         Returns to the section per orbit.
     max_phase_time : float
         Upper bound of every phase duration (s).
+    regularisation : float
+        Weight ε of ``ε ∫Σuᵢ² dt`` added to the objective of the work-based costs (units of the
+        cost per N²·m²·s): positive work alone has singular arcs, on which the inputs chatter
+        between the collocation points.  The reported cost excludes it.
     min_crossing_rate : float
         Least rate at which each phase's guard is crossed at its end, ``direction · ġ`` (guard
         units per second): a transversal touchdown, not a graze, which no simulation could
@@ -103,6 +107,7 @@ class GaitProblem:
     free: tuple[str, ...] = ()
     steps: int = 1
     max_phase_time: float = 10.0
+    regularisation: float = 1e-3
     min_crossing_rate: float = 1e-2
 
     def __post_init__(self) -> None:
