@@ -7,7 +7,8 @@ running", §rimless wheel; α = π/spokes):
 * **standing** — at rest with two spokes on the ground.  On the section (just after a forward
   impact) it is the fixed point ω = 0 of the rocking map ``P(ω) = cos²2α · ω`` (0 < ω < ω₁: the
   wheel rocks back onto the uphill spoke and forward again, losing a factor cos 2α at each
-  impact), with multiplier cos²2α.  The wheel can stand wherever the vertical lies between two
+  impact; the chapter's every-impact map has −cos 2α per impact), with multiplier cos²2α.  The
+  wheel can stand wherever the vertical lies between two
   spokes on the ground: for every slope below π/spokes;
 * **rolling** — the fixed point ``ω* = cot 2α · sqrt(4 g/l · sin α · sin γ)`` of the vaulting map
   ``P(ω) = cos 2α · sqrt(ω² + 4 g/l · sin α · sin γ)``, with multiplier cos²2α.  It exists only
@@ -18,7 +19,8 @@ Between γ_b and π/spokes both exist (bistable: which one the wheel ends in dep
 Here the rolling branch comes from continuation (``gaitopt.continuation``) from the default slope
 in both directions: downhill it ends at a ``boundary`` special point, where the gait ceases to
 exist (its period diverges as ω* → ω₁), and that location is compared with the closed-form root
-γ_b; uphill it runs to just below π/spokes, where the parameter's range ends.  Every branch point
+γ_b; uphill it runs to just below π/spokes, where standing ceases to exist (rolling goes on
+beyond it: ``problems/rimless_wheel_basin.py`` has the γ > α form).  Every branch point
 is compared with the closed-form ω* and cos²2α, and the standing point with the rocking map
 sampled by simulation.
 
@@ -117,8 +119,11 @@ def main(argv: list[str] | None = None) -> int:
         m = model.replace(slope=float(slope))
         for fraction in (0.5, 0.9):
             omega = fraction * m.vaulting_speed()
-            after = float(return_map(m, omega)[0])
-            rocking.append([float(slope), omega, after, m.closed_form_map(omega), after / omega])
+            # Two impacts (back onto the uphill spoke, forward onto the downhill one): the
+            # chapter's map counts each, −cos 2α per impact, cos² 2α per pair.
+            after = float(return_map(m, omega, steps=2)[0])
+            closed = m.closed_form_map(m.closed_form_map(omega))
+            rocking.append([float(slope), omega, after, closed, after / omega])
     write_csv(
         ["slope", "omega", "map_simulated", "map_closed_form", "ratio"],
         rocking,

@@ -208,3 +208,37 @@ def test_return_map_is_simulated_on_every_branch():
         assert return_map(model, omega)[0] == pytest.approx(
             model.closed_form_map(omega), abs=MAP_TOL
         )
+
+
+def test_a_wheel_at_rest_on_two_spokes_is_standing_not_a_timeout():
+    # θ̇ = 0 on the section: the hub presses onto the uphill spoke (θ̈ = g/l sin(γ − α) < 0).
+    model = gaitopt.model("rimless_wheel")
+    sim = gaitopt.simulate(model, {"theta_dot": 0.0}, steps=3)
+    assert sim.status == "standing" and "at rest" in sim.message
+    # For γ > α the same start falls forward and rolls: standing is impossible there.
+    steep = gaitopt.simulate(gaitopt.model("rimless_wheel", slope=0.5), {"theta_dot": 0.0}, steps=3)
+    assert steep.status == "completed"
+
+
+def test_basin_study_classifications_agree_with_simulation():
+    # The study's closed-form fate (energy to the first impact, Tedrake's map iterated) against
+    # hybrid simulation, at starts in each kind of region of the basin figure.
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parent.parent / "problems" / "rimless_wheel_basin.py"
+    spec = importlib.util.spec_from_file_location("rimless_wheel_basin", path)
+    study = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(study)
+    model = gaitopt.model("rimless_wheel")
+    # -1.42 rad/s rocks forward to above ω₁ and rolls; -2.0 vaults back and stands; 0.5 stands.
+    expected = {-1.42: study.ROLLING, -2.0: study.STANDING, 0.5: study.STANDING, 2.0: study.ROLLING}
+    for omega, fate in expected.items():
+        assert study.fate_closed_form(model, omega) == fate
+        assert study.fate_simulated(model, {"theta_dot": omega}) == fate
+    # In the plane: first impact by energy vs simulated first impact.
+    for theta, rate in ((0.1, -0.5), (-0.2, 0.8), (0.3, -2.5)):
+        sim = gaitopt.simulate(model, {"theta": theta, "theta_dot": rate}, steps=1)
+        assert study.first_impact(model, theta, rate) == pytest.approx(
+            sim.section_states[-1][1], abs=MAP_TOL
+        )
