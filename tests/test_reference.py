@@ -92,15 +92,17 @@ def test_rimless_wheel_numeric_map_matches_closed_form(theta_dot):
 @pytest.mark.parametrize("fraction", [0.3, 0.9])
 def test_rimless_wheel_rocks_back_below_the_vaulting_rate(fraction):
     # Source: below ω₁ = sqrt(2 g/l (1 − cos(γ − α))) the hub cannot vault (Tedrake); it rocks
-    # back, the uphill spoke strikes (θ̇ → −cos 2α ω), and it swings back onto the downhill spoke
-    # (θ̇ → cos² 2α ω): energy through the swings, angular momentum through the two impacts.
+    # back, the uphill spoke strikes (θ̇ → −cos 2α ω: one step of the chapter's map, which
+    # counts every impact), and it swings back onto the downhill spoke (θ̇ → cos² 2α ω): energy
+    # through the swings, angular momentum through the two impacts.
     model = gaitopt.model("rimless_wheel")
     omega = fraction * model.vaulting_speed()
-    sim = gaitopt.simulate(model, {"theta_dot": omega}, steps=1)
+    sim = gaitopt.simulate(model, {"theta_dot": omega}, steps=2)
     assert [e.transition for e in sim.events] == ["backward step", "forward step"]
     expected = math.cos(2 * model.alpha) ** 2 * omega
-    assert model.closed_form_map(omega) == pytest.approx(expected, rel=1e-15)
-    assert return_map(model, [omega])[0] == pytest.approx(expected, abs=1e-9)
+    assert model.closed_form_map(omega) == pytest.approx(-math.cos(2 * model.alpha) * omega)
+    assert model.closed_form_map(model.closed_form_map(omega)) == pytest.approx(expected, rel=1e-15)
+    assert return_map(model, [omega], steps=2)[0] == pytest.approx(expected, abs=1e-9)
 
 
 def test_rimless_wheel_one_d_fixed_points():
@@ -224,7 +226,8 @@ def test_simulation_sees_an_impact_within_one_integrator_step():
     # branch of the closed-form map (cos² 2α · ω, Tedrake's energy and momentum arguments) must
     # still come out.
     model = gaitopt.model("rimless_wheel", slope=0.3)
-    sim = gaitopt.simulate(model, {"theta_dot": 0.029}, steps=1)
+    sim = gaitopt.simulate(model, {"theta_dot": 0.029}, steps=2)
     assert [e.transition for e in sim.events] == ["backward step", "forward step"]
     # tolerance 1e-9: simulation at rtol 1e-11, as for the other simulated maps
-    assert sim.section_states[-1][1] == pytest.approx(model.closed_form_map(0.029), abs=1e-9)
+    two_impacts = model.closed_form_map(model.closed_form_map(0.029))
+    assert sim.section_states[-1][1] == pytest.approx(two_impacts, abs=1e-9)
