@@ -1,19 +1,19 @@
-"""Animated GIFs of walkers stepping down their slope, from a simulation.
+"""Animated GIFs of walkers, runners and jugglers, from a simulation.
 
-The drawing is generic: each phase's ``points(x, p)`` function gives named world-frame points
-relative to the current contact point, drawn as one polyline (legs) with a dot on the body mass
-(the point named ``hip``, ``hub``, ``mass``, ``body`` or ``com``).  At each transition with a
-``foothold`` the contact point moves to that point's world position at the event, so successive
-steps walk on.  Models with a shape the polyline does not show (the rimless wheel's spokes) have
-a drawing helper in :data:`_OUTLINES` (the kneed walker: legs and curved feet, without the
-helper points that mark arc centres and the next step's rolling origin).
+The drawing comes from declared model data: each phase's ``points(x, p)`` function gives named
+world-frame points relative to the current contact point; the model's
+:attr:`~gaitopt.hybrid.HybridModel.drawing` lists the polylines to draw through them (default:
+one polyline through every point), and :meth:`~gaitopt.hybrid.HybridModel.outline` draws shapes
+the points cannot say (the rimless wheel's spokes, the kneed walker's curved feet).  A dot marks
+the body mass (the point named ``hip``, ``hub``, ``mass``, ``body``, ``axle`` or ``com``).  At
+each transition with a ``foothold`` the contact point moves to that point's world position at
+the event, so successive steps walk on.
 """
 
 from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -27,28 +27,10 @@ from .simulation import Simulation
 
 __all__ = ["animate_walker", "walker_frames"]
 
-_MASS_POINTS = ("hip", "hub", "mass", "body", "com")
+_MASS_POINTS = ("hip", "hub", "mass", "body", "axle", "com")
 
 
-def _rimless_outline(
-    model: HybridModel, phase: Phase, x: np.ndarray, pts: np.ndarray
-) -> np.ndarray:
-    """Every spoke of the rimless wheel from the hub: spoke k at angle θ − 2αk (NaN-separated)."""
-    hub = pts[:, phase.point_names.index("hub")]
-    theta = x[phase.states.index("theta")]
-    alpha = math.pi / model.spokes
-    segments = []
-    for k in range(int(model.spokes)):
-        angle = theta - 2 * alpha * k
-        foot = hub - model.length * np.array([math.sin(angle), math.cos(angle)])
-        segments += [hub, foot, [np.nan, np.nan]]
-    return np.array(segments).T
-
-
-_KNEED_LEGS = ("stance_foot", "stance_knee", "hip", "swing_knee", "swing_foot")
-
-
-def _kneed_outline(model: HybridModel, phase: Phase, x: np.ndarray, pts: np.ndarray) -> np.ndarray:
+def kneed_outline(model: HybridModel, phase: Phase, x: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """The kneed walker's legs (foot, knee, hip, knee, foot) and, for curved feet, each foot's
     circular arc of radius ``foot_radius`` about its centre (±0.6 rad about the leg axis)."""
     names = phase.point_names
@@ -68,12 +50,25 @@ def _kneed_outline(model: HybridModel, phase: Phase, x: np.ndarray, pts: np.ndar
     return np.array(segments, dtype=float).T
 
 
-# Model-specific outlines (model name -> outline(model, phase, x, points) -> 2×M, NaN breaks);
-# every other model is drawn as the polyline through its points in declared order.
-_OUTLINES: dict[str, Callable[..., np.ndarray]] = {
-    "rimless_wheel": _rimless_outline,
-    "kneed_walker": _kneed_outline,
-}
+_KNEED_LEGS = ("stance_foot", "stance_knee", "hip", "swing_knee", "swing_foot")
+
+
+def _outline(model: HybridModel, phase: Phase, x: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """The model's declared drawing: its :meth:`outline`, else its :attr:`drawing` polylines,
+    else the polyline through every point."""
+    custom = model.outline(phase, x, pts)
+    if custom is not None:
+        return np.asarray(custom, dtype=float)
+    if model.drawing:
+        segments: list[np.ndarray] = []
+        for line in model.drawing:
+            present = [n for n in line if n in phase.point_names]
+            if len(present) < 2:
+                continue
+            segments += [pts[:, phase.point_names.index(n)] for n in present]
+            segments.append(np.array([np.nan, np.nan]))
+        return np.array(segments, dtype=float).T if segments else np.zeros((2, 0))
+    return pts
 
 
 def _check_drawable(model: HybridModel, simulation: Simulation) -> None:
@@ -129,7 +124,6 @@ def walker_frames(
     arcs = simulation.arcs
     offsets = _contact_offsets(model, simulation)
     ends = np.array([arc.t1 for arc in arcs])
-    outline_of = _OUTLINES.get(model.name)
     p = model.p
     frames = []
     for t in np.asarray(times, dtype=float):
@@ -138,7 +132,7 @@ def walker_frames(
         phase = model.phases[arc.phase]
         x = np.asarray(arc.solution(min(max(t, arc.t0), arc.t1)), dtype=float).ravel()
         pts = np.asarray(phase.points(x, p), dtype=float)
-        outline = outline_of(model, phase, x, pts) if outline_of else pts
+        outline = _outline(model, phase, x, pts)
         mass = [n for n in _MASS_POINTS if n in phase.point_names]
         mass_xy = pts[:, [phase.point_names.index(mass[0])]] if mass else np.zeros((2, 0))
         frames.append(
@@ -158,7 +152,7 @@ def animate_walker(
     fps: int = 30,
     *,
     max_frames: int = 150,
-    dpi: int = 70,
+    dpi: int = 100,
 ) -> Path:
     """Write a GIF of the walker moving down its slope over the simulated steps.
 
@@ -181,9 +175,9 @@ def animate_walker(
     fps : int
         Frames per second of playback, 1 to 50 (GIF viewers slow down shorter delays).
     max_frames : int
-        Upper bound on the number of frames (~150 frames at 70 dpi is about 0.7 MB).
+        Upper bound on the number of frames (~150 frames at 100 dpi is about 1 MB).
     dpi : int
-        Resolution (the figure is 6 × 3.2 inches: 420 × 224 pixels at 70 dpi).
+        Resolution (the figure is 6 × 3.2 inches: 600 × 320 pixels at 100 dpi).
 
     Returns
     -------
@@ -221,6 +215,8 @@ def animate_walker(
     slope = float(getattr(model, "slope", 0.0))
 
     fig, ax = plt.subplots(figsize=(6.0, 3.2), layout="constrained")
+    ax.set_xlabel("distance along the ground x (m)", fontsize=8)
+    ax.set_ylabel("height y (m)", fontsize=8)
     ground_x = np.array([xmin - 1.0, xmax + 1.0])
     ground_y = -ground_x * math.tan(slope)
     ax.fill_between(ground_x, ground_y, ymin - 10.0, color="0.85", zorder=0)
@@ -232,10 +228,10 @@ def animate_walker(
     ax.set_xlim(xmin, xmax)
     ax.set_ylim(ymin, ymax)
     ax.set_aspect("equal")
-    ax.set_xticks([])
-    ax.set_yticks([])
-    pace = "real time" if speed == 1.0 else f"played {speed:.3g}× faster than real time"
-    ax.set_title(f"{model.title or model.name} (slope {slope:.4g} rad) — {pace}", fontsize=9)
+    ax.tick_params(labelsize=7)
+    pace = "real time" if speed == 1.0 else f"{speed:.2g}× real time"
+    where = f"slope {slope:.3g} rad" if slope else "level ground"
+    ax.set_title(f"{model.title or model.name}, {where}; {pace}", fontsize=10)
 
     def draw(k: int):
         frame = frames[k]
@@ -243,7 +239,7 @@ def animate_walker(
         mass.set_data(frame["mass"][0], frame["mass"][1])
         contacts = np.unique(np.array([f["contact"] for f in frames[: k + 1]]), axis=0)
         steps.set_data(contacts[:, 0], contacts[:, 1])
-        clock.set_text(f"t = {times[k]:.2f}")
+        clock.set_text(f"t = {times[k]:.2f} {'s' if model.time_unit == 's' else '(dimensionless)'}")
         return body, mass, steps, clock
 
     animation = FuncAnimation(fig, draw, frames=len(frames), blit=False)

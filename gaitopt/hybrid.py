@@ -283,6 +283,14 @@ class HybridModel:
     state_units: ClassVar[dict[str, str]] = {}
     #: Unit of the model's time (``"s"``; ``"1"`` for dimensionless time).
     time_unit: ClassVar[str] = "s"
+    #: Rate partner of a coordinate where the naming convention ``q`` → ``q_dot`` does not hold
+    #: (the line juggler's ball height ``b`` has rate ``v``; its ``b_dot`` is a held pre-impact
+    #: velocity, not a rate): for phase portraits.
+    rates: ClassVar[dict[str, str]] = {}
+    #: Polylines to draw, each a tuple of point names (``Phase.point_names``), e.g. a hopper's
+    #: ``(("hip", "foot"), ("tail", "nose"))``; points in none are helpers, not drawn.  Empty:
+    #: one polyline through every point in declared order.  :meth:`outline` overrides both.
+    drawing: ClassVar[tuple[tuple[str, ...], ...]] = ()
     #: Default shooting mesh (segments per phase, RK steps per segment); refined automatically.
     mesh: ClassVar[tuple[int, int]] = (4, 3)
     #: Whether the model can have a passive gait (with its :meth:`nominal_input`) for
@@ -315,6 +323,13 @@ class HybridModel:
     def map_domain(self) -> tuple[float, float] | None:
         """Interval of a 1-D section coordinate where the return map can be defined, if the model
         knows it (for plots of the map); None otherwise."""
+        return None
+
+    def outline(self, phase: Phase, x: np.ndarray, points: np.ndarray) -> np.ndarray | None:
+        """A drawing of the model in ``phase`` at state ``x`` (2×M, m, NaN-separated polylines,
+        relative to the contact point) for shapes :attr:`drawing` cannot say (the rimless wheel's
+        spokes); ``points`` are ``phase.points(x, p)``.  None (default): use :attr:`drawing`."""
+        del phase, x, points
         return None
 
     def existence_note(self) -> str | None:

@@ -34,6 +34,9 @@ __all__ = [
     "coordinate_pairs",
     "save_figure",
     "plot_branch",
+    "state_unit",
+    "state_label",
+    "unit_label",
 ]
 
 _RATE_SUFFIX = "_dot"
@@ -50,6 +53,40 @@ def coordinate_pairs(states: tuple[str, ...] | list[str]) -> list[str]:
     ['stance', 'swing']
     """
     return [q for q in states if not q.endswith(_RATE_SUFFIX) and q + _RATE_SUFFIX in states]
+
+
+def state_unit(model: HybridModel, name: str) -> str | None:
+    """Unit of state ``name`` from the model's declared :attr:`HybridModel.state_units`; a rate
+    ``q_dot`` not listed gets ``unit(q)/time unit``; None if nothing is declared."""
+    units = dict(model.state_units)
+    if name in units:
+        return units[name]
+    if name.endswith(_RATE_SUFFIX) and name[: -len(_RATE_SUFFIX)] in units:
+        base, time = units[name[: -len(_RATE_SUFFIX)]], model.time_unit
+        return base if time == "1" and base == "1" else f"{base}/{time}"
+    return None
+
+
+def unit_label(unit: str | None) -> str:
+    """``"(rad)"``; ``"(dimensionless)"`` for ``"1"``; ``"(unit not declared)"`` for None."""
+    if unit is None:
+        return "(unit not declared)"
+    return "(dimensionless)" if unit == "1" else f"({unit})"
+
+
+def time_label(model: HybridModel) -> str:
+    """The model's time unit for labels: ``"s"``; ``"(dimensionless time)"`` for ``"1"``; a
+    named dimensionless time (``"τ"``) with that note."""
+    unit = model.time_unit
+    if unit == "s":
+        return "s"
+    return "(dimensionless time)" if unit == "1" else f"{unit} (dimensionless time)"
+
+
+def state_label(model: HybridModel, name: str, when: str = "") -> str:
+    """Axis label of a state: ``"theta_dot just after return n (rad/s)"``."""
+    text = f"{name} {when}".strip()
+    return f"{text} {unit_label(state_unit(model, name))}"
 
 
 def _transition(model: HybridModel, phase: int, name: str) -> Transition | None:
@@ -105,10 +142,11 @@ def plot_phase_portrait(
 
     Notes
     -----
-    Coordinates are in the model's units (rad for the walkers' angles, m for positions); rates in
-    those units per unit of the model's time (s, or dimensionless time for Van der Pol and the
-    simplest walker).  The title gives the model, the period and the largest modulus of the
-    nontrivial Floquet multipliers.
+    Each axis is labelled with the model's declared units (:attr:`HybridModel.state_units`), one
+    unit per axis: coordinates with different units (a hopper's metres and radians) are drawn in
+    separate panels of one figure (``fig.axes``; the returned ``ax`` is the first).  The title
+    gives the model, the period with its time unit and the largest modulus of the nontrivial
+    Floquet multipliers.
 
     Raises
     ------
@@ -124,20 +162,84 @@ def plot_phase_portrait(
     arcs = cycle.orbit
     names: list[str] = []
     for arc in arcs:
-        names += [q for q in coordinate_pairs(arc.states) if q not in names]
+        declared = [q for q, r in model.rates.items() if q in arc.states and r in arc.states]
+        held = set(model.rates.values())
+        pairs = declared + [
+            q
+            for q in coordinate_pairs(arc.states)
+            if q not in model.rates and q + _RATE_SUFFIX not in held
+        ]
+        names += [q for q in pairs if q not in names and q not in held]
     if not names:
         raise GaitoptInputError(
             f"{model.name}: no state q has a rate q{_RATE_SUFFIX} in the orbit's states "
             f"{arcs[0].states}; the phase portrait needs such pairs"
         )
-    fig, ax = _new_axes(ax, (7.6, 4.8))
+    _RATE.clear()
+    _RATE.update(model.rates)
+    groups: dict[tuple[str | None, str | None], list[str]] = {}
+    for q in names:
+        key = (state_unit(model, q), state_unit(model, _rate(q)))
+        groups.setdefault(key, []).append(q)
+    if len(groups) > 1 and ax is not None:
+        raise GaitoptInputError(
+            f"{model.name}: the coordinates have {len(groups)} different units, drawn on one axes "
+            f"each; pass ax=None to get a figure with {len(groups)} panels"
+        )
+    if ax is None:
+        fig, panels = plt.subplots(
+            1, len(groups), figsize=(7.6 + 4.2 * (len(groups) - 1), 4.8), layout="constrained"
+        )
+        panels = list(np.atleast_1d(panels))
+    else:
+        fig, panels = ax.figure, [ax]
     colours = {q: f"C{i % 10}" for i, q in enumerate(names)}
+    largest = np.max(np.abs(cycle.multipliers)) if len(cycle.multipliers) else float("nan")
+    stable = {True: "stable", False: "unstable"}.get(cycle.stable, "stability unknown")
+    for panel, ((unit, rate_unit), group) in zip(panels, groups.items(), strict=True):
+        _draw_portrait(panel, cycle, tuple(group), colours, simulation)
+        which = ", ".join(group)
+        panel.set_xlabel(f"coordinate {which} {unit_label(unit)}")
+        panel.set_ylabel(f"rate d/dt of {which} {unit_label(rate_unit)}")
+        panel.grid(True, alpha=0.3)
+        panel.legend(fontsize=8, loc="best")
+    panels[0].set_title(
+        f"{model.title or model.name}: period {cycle.period:.6g} {time_label(model)}, "
+        f"max |multiplier| {largest:.3g} ({stable})",
+        fontsize=10,
+    )
+    return fig, panels[0]
+
+
+def _pairs_in(states: tuple[str, ...], group: tuple[str, ...]) -> list[str]:
+    return [q for q in group if q in states and _RATE.get(q, q + _RATE_SUFFIX) in states]
+
+
+# Rate partner of each coordinate for the portrait being drawn: the model's declared
+# :attr:`HybridModel.rates`, else the naming convention q → q_dot (set by plot_phase_portrait).
+_RATE: dict[str, str] = {}
+
+
+def _rate(q: str) -> str:
+    return _RATE.get(q, q + _RATE_SUFFIX)
+
+
+def _draw_portrait(
+    ax: Axes,
+    cycle: LimitCycle,
+    group: tuple[str, ...],
+    colours: dict[str, str],
+    simulation: Simulation | None,
+) -> None:
+    """The orbit's arcs and resets (and a transient) for the coordinates in ``group``."""
+    model = cycle.model
+    arcs = cycle.orbit
 
     # The orbit: one solid line per coordinate and arc.
     labelled: set[str] = set()
     for arc in arcs:
-        for q in coordinate_pairs(arc.states):
-            i, j = arc.states.index(q), arc.states.index(q + _RATE_SUFFIX)
+        for q in _pairs_in(arc.states, group):
+            i, j = arc.states.index(q), arc.states.index(_rate(q))
             label = None if q in labelled else q
             labelled.add(q)
             ax.plot(arc.x[i], arc.x[j], color=colours[q], lw=1.8, label=label, zorder=3)
@@ -156,17 +258,21 @@ def plot_phase_portrait(
             kind = arc.transition + (" (impact)" if tr is None or tr.impact else "")
         else:
             kind = "reset (impact)" if tr is None or tr.impact else "reset"
-        if named and kind not in labelled:
-            # A neutral legend entry for the marker shape (the markers take each coordinate's
-            # colour).
-            labelled.add(kind)
-            ax.scatter([], [], s=28, marker=marker, color="0.35", label=kind)
-        before_pairs, after_pairs = coordinate_pairs(arc.states), coordinate_pairs(nxt.states)
+
+        def legend_entry(kind: str = kind, marker: str = marker) -> None:
+            # With several kinds, a neutral legend entry for the marker shape (the markers take
+            # each coordinate's colour), added only once a marker of that kind is drawn.
+            if named and kind not in labelled:
+                labelled.add(kind)
+                ax.scatter([], [], s=28, marker=marker, color="0.35", label=kind)
+
+        before_pairs, after_pairs = _pairs_in(arc.states, group), _pairs_in(nxt.states, group)
         for q in before_pairs:
             if q not in after_pairs:
                 # The coordinate stops being a state at this reset (a knee that locks: the shank
                 # then moves with the thigh): mark where it ends.
-                i, j = arc.states.index(q), arc.states.index(q + _RATE_SUFFIX)
+                legend_entry()
+                i, j = arc.states.index(q), arc.states.index(_rate(q))
                 ax.scatter(
                     arc.x[i, -1],
                     arc.x[j, -1],
@@ -177,8 +283,8 @@ def plot_phase_portrait(
                     zorder=4,
                 )
                 continue
-            i, j = arc.states.index(q), arc.states.index(q + _RATE_SUFFIX)
-            i2, j2 = nxt.states.index(q), nxt.states.index(q + _RATE_SUFFIX)
+            i, j = arc.states.index(q), arc.states.index(_rate(q))
+            i2, j2 = nxt.states.index(q), nxt.states.index(_rate(q))
             before = np.array([arc.x[i, -1], arc.x[j, -1]])
             after = np.array([nxt.x[i2, 0], nxt.x[j2, 0]])
             scale = max(np.ptp(arc.x[i]), np.ptp(arc.x[j]), 1e-300)
@@ -186,6 +292,7 @@ def plot_phase_portrait(
                 # An identity reset (Van der Pol's section crossing): nothing to draw.  The dense
                 # orbit closes only to the shooting accuracy, hence the relative 1e-6.
                 continue
+            legend_entry()
             ax.plot(*np.c_[before, after], color=colours[q], lw=1.2, ls="--", zorder=2)
             ax.scatter(
                 *before, s=28, marker=marker, facecolors="white", edgecolors=colours[q], zorder=4
@@ -196,26 +303,14 @@ def plot_phase_portrait(
         for q in after_pairs:
             if q not in before_pairs:
                 # The coordinate becomes a state at this reset (a knee released): mark its start.
-                i2, j2 = nxt.states.index(q), nxt.states.index(q + _RATE_SUFFIX)
+                legend_entry()
+                i2, j2 = nxt.states.index(q), nxt.states.index(_rate(q))
                 ax.scatter(
                     nxt.x[i2, 0], nxt.x[j2, 0], s=28, marker=marker, color=colours[q], zorder=4
                 )
 
     if simulation is not None:
-        _plot_transient(ax, model, simulation, names)
-
-    ax.set_xlabel("coordinate q (rad or m)")
-    ax.set_ylabel("rate dq/dt (per unit time)")
-    largest = np.max(np.abs(cycle.multipliers)) if len(cycle.multipliers) else float("nan")
-    stable = {True: "stable", False: "unstable"}.get(cycle.stable, "stability unknown")
-    ax.set_title(
-        f"{model.title or model.name}: period {cycle.period:.6g}, "
-        f"max |multiplier| {largest:.3g} ({stable})",
-        fontsize=10,
-    )
-    ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
-    return fig, ax
+        _plot_transient(ax, model, simulation, list(group))
 
 
 def _plot_transient(ax: Axes, model: HybridModel, simulation: Simulation, names: list[str]) -> None:
@@ -226,11 +321,11 @@ def _plot_transient(ax: Axes, model: HybridModel, simulation: Simulation, names:
         ys: list[np.ndarray] = []
         for arc in simulation.arcs:
             states = model.phases[arc.phase].states
-            if q not in states or q + _RATE_SUFFIX not in states:
+            if q not in states or _rate(q) not in states:
                 continue
             _, X = arc.sample(_TRANSIENT_SAMPLES)
             xs += [X[states.index(q)], [np.nan]]
-            ys += [X[states.index(q + _RATE_SUFFIX)], [np.nan]]
+            ys += [X[states.index(_rate(q))], [np.nan]]
         if xs:
             ax.plot(
                 np.concatenate(xs),
@@ -330,10 +425,16 @@ def plot_return_map(
             label="closed form",
         )
 
-    # The staircase: vertical to the map, horizontal to the diagonal, repeated.
+    # The staircase: vertical to the map, horizontal to the diagonal, repeated.  A default start
+    # on a fixed point would show nothing: it is moved 30 % of the interval away from it.
     if start is None:
         guess = model.default_start().get(name, np.nan)
         start = guess if lo <= guess <= hi else 0.5 * (lo + hi)
+        for c in found.cycles:
+            fp = float(c.section_point[0])
+            if abs(start - fp) < 0.05 * (hi - lo):
+                away = fp + 0.3 * (hi - lo)
+                start = away if away <= hi else fp - 0.3 * (hi - lo)
     s = float(start)
     path_x, path_y = [s], [s]
     for _ in range(int(iterations)):
@@ -343,7 +444,14 @@ def plot_return_map(
         path_x += [s, s_next]
         path_y += [s_next, s_next]
         s = s_next
-    ax.plot(path_x, path_y, color="C1", lw=1.0, label=f"staircase from {start:.4g}")
+    unit = state_unit(model, name)
+    ax.plot(
+        path_x,
+        path_y,
+        color="C1",
+        lw=1.0,
+        label=f"staircase from {start:.4g}" + (f" {unit}" if unit and unit != "1" else ""),
+    )
     ax.plot([start], [start], "s", color="C1", ms=5)
 
     # Fixed points, each a verified limit cycle (duplicates from nearby brackets merged).
@@ -380,8 +488,8 @@ def plot_return_map(
     bottom = min(lo, float(finite.min()) if finite.size else lo)
     ax.set_xlim(lo, hi)
     ax.set_ylim(bottom, top)
-    ax.set_xlabel(f"{name} just after return n")
-    ax.set_ylabel(f"{name} just after return n + 1")
+    ax.set_xlabel(state_label(model, name, "at return n"))
+    ax.set_ylabel(state_label(model, name, "at return n + 1"))
     ax.set_title(f"{model.title or model.name}: step-to-step return map", fontsize=10)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8, loc="upper left")
@@ -483,6 +591,7 @@ def plot_branch(
         top, bottom = axes
         fig = top.figure
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    n_labels = 0
     for depth, sub in enumerate(branch.descendants()):
         colour = colours[depth % len(colours)]
         # The branch's points with its special points inserted in branch order: a special point
@@ -515,14 +624,26 @@ def plot_branch(
                 continue
             value = sp.cycle.fixed_point[name]
             top.plot([sp.param], [value], "o", color="k", ms=5, zorder=5)
+            # Successive labels alternate above and below (period doublings crowd together).
+            shift = 10 * (1 + n_labels % 3) * (1 if n_labels % 2 == 0 else -1)
+            n_labels += 1
             top.annotate(
-                sp.kind, (sp.param, value), textcoords="offset points", xytext=(4, 4), fontsize=8
+                sp.kind,
+                (sp.param, value),
+                textcoords="offset points",
+                xytext=(4, shift),
+                fontsize=7,
+                arrowprops={"arrowstyle": "-", "lw": 0.4, "color": "0.4"},
             )
             bottom.plot([sp.param], [np.max(np.abs(sp.cycle.multipliers))], "o", color="k", ms=5)
-    bottom.axhline(1.0, color="0.5", lw=0.8, ls="--")
-    top.set_ylabel(f"{name} on the section")
-    bottom.set_ylabel("max |multiplier|")
-    bottom.set_xlabel(branch.param)
+    bottom.axhline(1.0, color="0.3", lw=0.9, ls="--", label="|λ| = 1 (stability limit)")
+    bottom.set_yscale("log")
+    bottom.legend(fontsize=7, loc="best")
+    top.set_ylabel(state_label(model, name, "on the section"))
+    bottom.set_ylabel("largest Floquet multiplier modulus |λ| (dimensionless, log scale)")
+    spec = next((sp for sp in model.parameter_specs() if sp.name == branch.param), None)
+    unit = spec.unit if spec is not None else None
+    bottom.set_xlabel(f"parameter {branch.param} {unit_label(unit)}")
     top.set_title(
         f"{model.title or model.name}: gaits vs {branch.param} (solid stable, dotted unstable)"
     )

@@ -340,6 +340,15 @@ def simulate(
                 f"{at_start[1]} in phase '{model.phases[phase].name}'"
             )
             break
+        resting = _rests_on_guard(funcs, x)
+        if resting is not None and len(sec_t) - 1 < steps:
+            sim.status = "standing"
+            sim.accumulation_time = t
+            sim.message = (
+                f"at rest against '{resting}' at t = {t:.6g} s after {len(sec_t) - 1} steps: the "
+                f"state starts on that guard with zero rate and presses into it (standing)"
+            )
+            break
         arc, fired, x_minus, status = _integrate_phase(
             funcs, solver_cls, t, x, rtol, atol, max_phase_time, method
         )
@@ -459,6 +468,23 @@ def _short_excursion(funcs: _PhaseFunctions, x0: np.ndarray, armed: np.ndarray) 
     return float(bound) if np.isfinite(bound) and bound > 0 else None
 
 
+def _rests_on_guard(funcs: _PhaseFunctions, x0: np.ndarray) -> str | None:
+    """The transition whose guard the state rests on, pressing into it, or None.
+
+    A state exactly on a guard (signed value 0), with zero rate (``ġ = 0``) and an acceleration
+    toward the firing side (``g̈ > 0``), is held there by the contact the guard describes (the
+    rimless wheel at rest on two spokes): the limit of the accumulating impacts, reached."""
+    for k, tr in enumerate(funcs.phase.transitions):
+        if tr.terminal or abs(funcs.signed_guard(k, x0)) > _ARM:
+            continue
+        rate = rate_along(funcs.phase.flow, tr.guard)
+        g1 = tr.direction * float(rate(x0, funcs.u, funcs.p))
+        g2 = tr.direction * float(rate_along(funcs.phase.flow, rate)(x0, funcs.u, funcs.p))
+        if abs(g1) <= _ARM and g2 > 0:
+            return tr.name
+    return None
+
+
 def _initial_state(model: HybridModel, x0, phase: int) -> np.ndarray:
     if x0 is None:
         if phase != 0:
@@ -538,8 +564,10 @@ def _integrate_phase(funcs: _PhaseFunctions, solver_cls, t0, x0, rtol, atol, max
             armed[k] = was_armed
             values[k] = previous
         interpolants.append(dense)
-        if short is not None and np.all(armed[: len(funcs.phase.transitions)]):
-            solver.max_step, short = np.inf, None  # the short excursion is seen: full steps
+        if short is not None and (
+            np.all(armed[: len(funcs.phase.transitions)]) or t_new - t0 > 8 * short
+        ):
+            solver.max_step, short = np.inf, None  # the excursion is over: full steps
         if best is not None:
             ts.append(best[0])
             return OdeSolution(ts, interpolants), best[1], best[2], None

@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import re
 
 import matplotlib
 
@@ -223,3 +224,130 @@ def test_write_json_is_all_or_nothing(tmp_path):
         write_json({"period": object()}, path)  # not JSON: the old file stays whole
     assert json.loads(path.read_text()) == {"period": 1.0}
     assert _hidden(tmp_path) == []
+
+
+# -- every axis carries quantity, symbol and unit -------------------------------------------------
+# A unit suffix: "(rad)", "(m/s)", "(dimensionless)", "[m]" at the end of the label.
+_UNIT = re.compile(r"(\([^()]+\)|\[[^\[\]]+\])\s*$")
+_NO_UNIT = ("unit not declared",)
+
+
+def axes_without_units(fig) -> list[str]:
+    """Every visible axis of ``fig`` whose label is missing or has no unit suffix (images with
+    their axes switched off are exempt)."""
+    bad = []
+    for k, ax in enumerate(fig.axes):
+        if not ax.get_visible() or not ax.axison:
+            continue
+        for which, label in (("x", ax.get_xlabel()), ("y", ax.get_ylabel())):
+            if (
+                which == "x"
+                and not ax.xaxis.get_visible()
+                or which == "y"
+                and not (ax.yaxis.get_visible())
+            ):
+                continue
+            if (
+                which == "x"
+                and not label
+                and any(
+                    a is not ax and a.get_shared_x_axes().joined(a, ax) and a.get_xlabel()
+                    for a in fig.axes
+                )
+            ):
+                continue  # a shared x axis labelled once, under the bottom panel
+            if not _UNIT.search(label) or any(t in label for t in _NO_UNIT):
+                bad.append(
+                    f"axes {k} ({ax.get_title() or ax.get_title(loc='left')!r}) {which}: {label!r}"
+                )
+    return bad
+
+
+def test_unit_audit_can_fail():
+    fig, ax = plt.subplots()
+    ax.plot([0, 1], [0, 1])
+    ax.set_xlabel("coordinate q (rad or m")  # no closing parenthesis: no unit suffix
+    ax.set_ylabel("rate")
+    assert len(axes_without_units(fig)) == 2
+    ax.set_xlabel("stance angle θ (rad)")
+    ax.set_ylabel("stance rate θ̇ (rad/s)")
+    assert axes_without_units(fig) == []
+
+
+@pytest.mark.parametrize("name", sorted(gaitopt.REGISTRY))
+def test_every_model_figure_labels_each_axis_with_a_unit(name, cycles):
+    cycle = cycles[name] if name in cycles else gaitopt.find_limit_cycle(gaitopt.model(name))
+    if not cycle.success:
+        pytest.skip(f"{name}: no gait at the defaults to draw ({cycle.message[:60]})")
+    model = cycle.model
+    sim = gaitopt.simulate(model, steps=3, inputs=cycle.inputs)
+    fig, _ = plot_phase_portrait(cycle, simulation=sim)
+    assert axes_without_units(fig) == []
+    # The period is shown with its unit.
+    title = fig.axes[0].get_title()
+    assert re.search(r"period [0-9.e+-]+ (s|\(dimensionless time\)|τ)", title), title
+    # One unit per axis: every coordinate on an axis has the label's unit.
+    for ax in fig.axes:
+        unit = _UNIT.search(ax.get_xlabel()).group(0).strip("()[] ")
+        for line in ax.get_lines():
+            q = line.get_label()
+            if q in model.state_units:
+                assert model.state_units[q] in (unit, "1"), (q, unit)
+    if len(model.section.coordinates) == 1:
+        s = float(cycle.section_point[0])
+        lo, hi = sorted((0.5 * s, 1.5 * s)) if s else (-1.0, 1.0)
+        fig, ax = plot_return_map(model, (lo, hi), iterations=2, samples=6)
+        assert axes_without_units(fig) == []
+        # A staircase started by default is moved off a fixed point (else it shows nothing).
+        stair = next(ln for ln in ax.get_lines() if ln.get_label().startswith("staircase"))
+        for fp in (g for ln in ax.get_lines() if ln.get_gid() for g in ln.get_xdata()):
+            assert abs(stair.get_xdata()[0] - fp) > 0.04 * (hi - lo)
+
+
+def test_line_juggler_portrait_plots_the_ball_height_against_its_velocity(cycles):
+    # Defect: b was plotted against the held pre-impact velocity b_dot (a flat line).  The
+    # declared rate of b is v: the orbit's velocity spans ±ḃ_d (the mirror law's fixed point).
+    cycle = cycles["line_juggler"]
+    _, ax = plot_phase_portrait(cycle)
+    (line,) = [ln for ln in ax.get_lines() if ln.get_label() == "b"]
+    v = np.asarray(line.get_ydata())
+    assert np.ptp(v) > 1.0  # not flat
+    assert ax.get_ylabel().endswith("(m/s)")
+
+
+def test_legend_lists_only_markers_that_are_drawn(cycles):
+    # Defect: the vertical hopper's legend named resets whose markers were never drawn.  Its
+    # bottom, liftoff and apex resets only relabel the state (y, ẏ unchanged: no jump drawn);
+    # touchdown is the one drawn (the leg's mass is lost in the impact).
+    cycle = cycles["vertical_hopper"]
+    kinds = {arc.transition for arc in cycle.orbit}
+    assert len(kinds) > 1  # several kinds of reset in the cycle ...
+    _, ax = plot_phase_portrait(cycle)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert labels == ["y", "touchdown (impact)"]  # ... but only one is drawn and listed
+
+
+def test_branch_plot_has_parameter_units_and_log_multipliers():
+    branch = gaitopt.continuation(gaitopt.model("rimless_wheel"), "slope", to=0.1)
+    from gaitopt.plotting import plot_branch
+
+    fig, (top, bottom) = plot_branch(branch)
+    assert axes_without_units(fig) == []
+    assert bottom.get_xlabel() == "parameter slope (rad)"
+    assert bottom.get_yscale() == "log"
+    assert any(ln.get_label().startswith("|λ| = 1") for ln in bottom.get_lines())
+
+
+def test_gifs_are_readable_and_draw_only_declared_lines(tmp_path):
+    # Defect: the Raibert hopper's GIF joined the body's ends to the foot (a polyline through
+    # every point).  Its declared drawing is the leg (hip–foot) and the body (tail–nose).
+    model = gaitopt.model("raibert_hopper")
+    cycle = gaitopt.find_limit_cycle(model)
+    sim = gaitopt.simulate(model, cycle.x, steps=1, inputs=cycle.inputs)
+    frame = walker_frames(model, sim, [0.5 * (sim.arcs[0].t0 + sim.arcs[0].t1)])[0]
+    pieces = np.split(frame["outline"], np.flatnonzero(np.isnan(frame["outline"][0])), axis=1)
+    drawn = [p[:, ~np.isnan(p[0])].shape[1] for p in pieces]
+    assert [n for n in drawn if n] == [2, 2]
+    path = animate_walker(model, sim, tmp_path / "hop.gif", fps=10, max_frames=3)
+    with Image.open(path) as im:
+        assert im.size[0] > 420 and im.size[1] > 224  # larger than the old 420×224

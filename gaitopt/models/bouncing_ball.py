@@ -63,6 +63,7 @@ class BouncingBall(HybridModel):
     (m/s); section just after an impact (``phase``, ``y_dot``)."""
 
     name = "bouncing_ball"
+    state_units = {"phase": "rad", "y": "m", "y_dot": "m/s"}  # for axis labels
     title = "Ball bouncing on a vibrating table"
     reference = "Holmes 1982; Guckenheimer & Holmes 1983, §2.4"
     mesh = (4, 4)

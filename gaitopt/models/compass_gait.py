@@ -51,6 +51,12 @@ class CompassGait(HybridModel):
     (rad/s); per-step input ``hip_torque`` (N·m, constant over a step)."""
 
     name = "compass_gait"
+    state_units = {
+        "stance": "rad",
+        "swing": "rad",
+        "stance_dot": "rad/s",
+        "swing_dot": "rad/s",
+    }  # for axis labels
     title = "Compass gait"
     reference = "Goswami, Thuilot & Espiau 1996; Drake CompassGait"
     inputs = ("hip_torque",)

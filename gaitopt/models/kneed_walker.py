@@ -170,6 +170,14 @@ class KneedWalker(HybridModel):
     phase 1 (knee locked) ``q1, q2, q1_dot, q2_dot``."""
 
     name = "kneed_walker"
+    state_units = {
+        "q1": "rad",
+        "q2": "rad",
+        "q3": "rad",
+        "q1_dot": "rad/s",
+        "q2_dot": "rad/s",
+        "q3_dot": "rad/s",
+    }  # for axis labels
     title = "Kneed walker"
     reference = "Hsu Chen 2007; McGeer 1990; Tedrake, Underactuated Robotics"
     mesh = (4, 5)  # 20 RK8 steps per phase: discretisation error ~1e-11 at the defaults
@@ -414,6 +422,12 @@ class KneedWalker(HybridModel):
             "just after heel strike: q2 = q3 = 2·slope − q1, q3_dot = q2_dot",
         )
         return (phase0, phase1), section
+
+    def outline(self, phase, x, points):
+        """Legs and curved feet, for drawing (:func:`gaitopt.animation.kneed_outline`)."""
+        from ..animation import kneed_outline
+
+        return kneed_outline(self, phase, x, points)
 
     def default_start(self) -> dict[str, float]:
         """A post-heel-strike state near the passive gait at the defaults (rounded)."""

@@ -60,6 +60,8 @@ class LineJuggler(HybridModel):
     pre-impact velocity, held); section just before impact, coordinate ``b_dot``."""
 
     name = "line_juggler"
+    rates = {"b": "v"}  # b_dot is the held pre-impact velocity, not the rate of b
+    state_units = {"b": "m", "v": "m/s", "b_dot": "m/s"}  # for axis labels
     title = "Line juggler (mirror law)"
     reference = "Buehler, Koditschek & Kindlmann 1990; Tedrake, Underactuated Robotics"
     mesh = (4, 4)

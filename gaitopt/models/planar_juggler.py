@@ -93,6 +93,14 @@ class PlanarJuggler(HybridModel):
     ``x, x_dot_pre, energy_pre``."""
 
     name = "planar_juggler"
+    state_units = {
+        "x": "m",
+        "y": "m",
+        "x_dot": "m/s",
+        "y_dot": "m/s",
+        "x_dot_pre": "m/s",
+        "energy_pre": "J/kg",
+    }  # for axis labels
     title = "Planar juggler (one-link paddle, mirror law)"
     reference = "Buehler, Koditschek & Kindlmann 1990"
     mesh = (4, 4)

@@ -105,6 +105,19 @@ class RaibertHopper(HybridModel):
     (Raibert's controller is inside the dynamics)."""
 
     name = "raibert_hopper"
+    drawing = (("hip", "foot"), ("tail", "nose"))  # leg and body; other points are helpers
+    state_units = {
+        "x": "m",
+        "z": "m",
+        "phi": "rad",
+        "x_dot": "m/s",
+        "z_dot": "m/s",
+        "phi_dot": "rad/s",
+        "r": "m",
+        "theta": "rad",
+        "r_dot": "m/s",
+        "theta_dot": "rad/s",
+    }  # for axis labels
     title = "Planar Raibert hopper (three-part controller)"
     reference = "Raibert 1986; Raibert, Brown & Chepponis 1984"
     mesh = (4, 4)

@@ -33,6 +33,7 @@ import math
 from dataclasses import dataclass
 
 import casadi as ca
+import numpy as np
 
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import parameter
@@ -245,6 +246,17 @@ class RimlessWheel(HybridModel):
             f"{omega1:.4g} rad/s; at slope {self.slope:g} the wheel comes to rest instead "
             f"(Tedrake, Underactuated Robotics, rimless wheel)"
         )
+
+    def outline(self, phase, x, points):
+        """Every spoke from the hub, spoke k at angle θ − 2αk (NaN-separated), for drawing."""
+        hub = np.asarray(points)[:, phase.point_names.index("hub")]
+        theta = float(x[phase.states.index("theta")])
+        segments = []
+        for k in range(int(self.spokes)):
+            angle = theta - 2 * self.alpha * k
+            foot = hub - self.length * np.array([math.sin(angle), math.cos(angle)])
+            segments += [hub, foot, [np.nan, np.nan]]
+        return np.array(segments, dtype=float).T
 
     def default_start(self) -> dict[str, float]:
         """Twice the vaulting rate ω₁ plus 0.1 rad/s (rolls on, and converges to rolling where it

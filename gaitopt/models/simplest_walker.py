@@ -34,6 +34,13 @@ class SimplestWalker(HybridModel):
     (rad per unit of dimensionless time τ = t·sqrt(g/l)); g = l = 1."""
 
     name = "simplest_walker"
+    state_units = {
+        "theta": "rad",
+        "phi": "rad",
+        "theta_dot": "rad/τ",
+        "phi_dot": "rad/τ",
+    }  # for axis labels
+    time_unit = "τ"  # dimensionless time τ = t·sqrt(g/l)
     title = "Simplest walking model"
     reference = "Garcia, Chatterjee, Ruina & Coleman 1998"
 

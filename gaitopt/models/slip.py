@@ -275,6 +275,17 @@ class Slip(HybridModel):
     (rad), ``r_dot``, ``theta_dot``; per-step input ``touchdown_angle`` (rad from vertical)."""
 
     name = "slip"
+    drawing = (("hip", "foot"),)  # leg and body; other points are helpers
+    state_units = {
+        "x": "m",
+        "z": "m",
+        "x_dot": "m/s",
+        "z_dot": "m/s",
+        "r": "m",
+        "theta": "rad",
+        "r_dot": "m/s",
+        "theta_dot": "rad/s",
+    }  # for axis labels
     title = "Spring-loaded inverted pendulum (SLIP)"
     reference = "Blickhan 1989; Geyer et al. 2005; Tedrake, Underactuated Robotics"
     inputs = ("touchdown_angle",)

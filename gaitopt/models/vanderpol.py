@@ -25,6 +25,8 @@ class VanDerPol(HybridModel):
     """Van der Pol oscillator ``q̈ = μ (1 − q²) q̇ − q`` (dimensionless time)."""
 
     name = "vanderpol"
+    state_units = {"q": "1", "q_dot": "1"}  # for axis labels
+    time_unit = "1"
     title = "Van der Pol oscillator"
     reference = "van der Pol 1926; Hairer, Nørsett & Wanner, Solving ODEs I"
     mesh = (8, 8)  # a long period (6.66 at μ = 1) with fast relaxation for large μ

@@ -91,6 +91,13 @@ class VerticalHopper(HybridModel):
     ``dissipated``; per-step input ``thrust_offset`` (m, added to the controller's thrust)."""
 
     name = "vertical_hopper"
+    state_units = {
+        "y": "m",
+        "y_dot": "m/s",
+        "apex_energy": "J",
+        "dissipated": "J",
+        "delta": "m",
+    }  # for axis labels
     title = "Vertical hopper (energy-controlled thrust)"
     reference = "Raibert 1984, 1986; Tedrake, Underactuated Robotics"
     inputs = ("thrust_offset",)
