@@ -76,7 +76,9 @@ def test_augmented_jacobian_matches_finite_differences(kind):
     for k in range(y.size):
         e = np.zeros_like(y)
         e[k] = 1e-6
-        fd[:, k] = (system.evaluate(y + e, b, c, par)[0] - system.evaluate(y - e, b, c, par)[0]) / 2e-6
+        fd[:, k] = (
+            system.evaluate(y + e, b, c, par)[0] - system.evaluate(y - e, b, c, par)[0]
+        ) / 2e-6
     assert np.max(np.abs(J - fd)) < 1e-6 * np.max(np.abs(J))
 
 

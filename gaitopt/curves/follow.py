@@ -32,9 +32,8 @@ from .result import Curve, CurvePoint
 from .system import (
     BOUNDARY_QUANTITIES,
     CURVE_KINDS,
-    AugmentedSystem,
-    Parametrisation,
     ParameterPath,
+    Parametrisation,
     augmented_system,
     bordering,
     singular_matrix,
@@ -43,7 +42,10 @@ from .system import (
 __all__ = ["bifurcation_curve", "curve_from"]
 
 _LOCATE_TOL = 1e-10  # parameter accuracy of located points (absolute)
-_MAX_MESH_REFINEMENTS = 3
+_MAX_MESH_REFINEMENTS = 2
+#: Default step control along a curve (scaled arclength) and of the one-parameter search.
+CURVE_STEPS = PseudoArclength(step=0.05, max_step=0.2)
+BRANCH_STEPS = PseudoArclength()
 
 
 def bifurcation_curve(
@@ -58,8 +60,8 @@ def bifurcation_curve(
     steps: int = 1,
     at: Sequence[float] = (),
     bounds: tuple[float, float] | None = None,
-    options: PseudoArclength = PseudoArclength(step=0.05, max_step=0.2),
-    branch_options: PseudoArclength = PseudoArclength(),
+    options: PseudoArclength = CURVE_STEPS,
+    branch_options: PseudoArclength = BRANCH_STEPS,
     verify: bool = True,
     tol: float = 1e-10,
 ) -> Curve:
@@ -186,7 +188,7 @@ def curve_from(
     first: LimitCycle | None = None,
     at: Sequence[float] = (),
     bounds: tuple[float, float] | None = None,
-    options: PseudoArclength = PseudoArclength(step=0.05, max_step=0.2),
+    options: PseudoArclength = CURVE_STEPS,
     verify: bool = True,
     tol: float = 1e-10,
 ) -> Curve:
@@ -278,6 +280,10 @@ def _w_of(cycle: LimitCycle, tr: Transcription) -> np.ndarray:
     return tr.pack(cycle.section_point, nodes, [float(d) for d in cycle.durations])
 
 
+class _MeshLimit(Exception):
+    """The discretisation error stays above the tolerance at the finest mesh allowed."""
+
+
 def _doubled(disc: MultipleShooting) -> MultipleShooting:
     return MultipleShooting(disc.segments, 2 * disc.steps, disc.dense)
 
@@ -299,6 +305,7 @@ class _Follower:
             type(cycle.model), cycle.discretisation, cycle.steps, kind, boundary
         )
         self.start_cycle = cycle
+        self.finest = cycle.discretisation.steps * 2**_MAX_MESH_REFINEMENTS
         self.b, self.c = self._border(cycle.jacobian)
         self.cycles: list[LimitCycle] = []
         self.special_points: list[CurvePoint] = []
@@ -382,16 +389,19 @@ class _Follower:
         if model is None or not self.bounds[0] <= lam[0] <= self.bounds[1]:
             return None, y
         error = self._discretisation_error(y)
-        refinements = 0
-        while error > self.tol and refinements < _MAX_MESH_REFINEMENTS:
+        while error > self.tol and self.tr.disc.steps < self.finest:
             self.system = augmented_system(
                 type(model), _doubled(self.tr.disc), self.steps, self.kind, self.boundary
             )
-            refinements += 1
             y, ok, _ = self.correct(y, *self.fix(1, float(lam[1])))
             if not ok:
                 return None, y
             error = self._discretisation_error(y)
+        if error > self.tol:
+            raise _MeshLimit(
+                f"the discretisation error {error:.2g} exceeds tol {self.tol:g} at the finest "
+                f"mesh ({self.tr.disc.steps} RK steps per segment) near {self._where(y)}"
+            )
         lam = self.lam(y)
         model = self.par.model_at(lam)
         if model is None:
@@ -438,6 +448,12 @@ class _Follower:
 
     # -- the loop ----------------------------------------------------------------------------
     def run(self) -> None:
+        try:
+            self._run()
+        except _MeshLimit as exc:
+            self.stop = f"the curve stops: {exc}"
+
+    def _run(self) -> None:
         opts = self.options
         tr = self.tr
         y = np.concatenate([_w_of(self.start_cycle, tr), self.par.lam0 / self.par.scale])
@@ -473,9 +489,7 @@ class _Follower:
             if not ok:
                 h /= 2
                 if h < opts.min_step:
-                    self.stop = (
-                        f"the corrector cannot continue the curve near {self._where(y)}"
-                    )
+                    self.stop = f"the corrector cannot continue the curve near {self._where(y)}"
                     return
                 continue
             cycle, y_new = self.certified(y_new)

@@ -114,7 +114,9 @@ class Curve:
     @property
     def params(self) -> np.ndarray:
         """``(λ₁, λ₂)`` of each point (rows)."""
-        return np.column_stack([self.values(0), self.values(1)]) if self.cycles else np.zeros((0, 2))
+        return (
+            np.column_stack([self.values(0), self.values(1)]) if self.cycles else np.zeros((0, 2))
+        )
 
     @property
     def multipliers(self) -> np.ndarray:

@@ -141,7 +141,7 @@ class ParameterPath:
 
     def value_of(self, model: HybridModel) -> float:
         """``λ`` of a model on the path; raises if the model is not on it."""
-        key, offset, slope = next((it for it in self._items if it[2] != 0))
+        key, offset, slope = next(it for it in self._items if it[2] != 0)
         value = (float(getattr(model, key)) - offset) / slope
         for k, v in self.values(value).items():
             have = float(getattr(model, k))
@@ -285,9 +285,14 @@ def border_size(kind: str, m: int) -> int:
 
 
 # -- the CasADi function --------------------------------------------------------------------------
-def _symbolic(f: ca.Function) -> ca.Function:
-    """An SX function (MX ones are expanded, so they can be called on SX symbols)."""
-    return f if f.is_a("SXFunction") else f.expand()
+def _symbolic(f: ca.Function, sym) -> ca.Function:
+    """``f`` callable on symbols of type ``sym`` (MX functions expanded for SX symbols)."""
+    return f.expand() if sym is ca.SX and not f.is_a("SXFunction") else f
+
+
+# SX (scalar graphs, about twice as fast to evaluate) while the graph stays small; MX beyond
+# (refined meshes): the SX graph of the second derivatives grows with the RK steps per phase.
+_SX_MAX_STEPS = 8
 
 
 @dataclass(frozen=True)
@@ -304,7 +309,8 @@ class AugmentedSystem:
         For a boundary: the vanishing quantity (one of :data:`BOUNDARY_QUANTITIES`) and the
         phase (chain index) it belongs to.
     function : casadi.Function
-        ``(w, ℓ, b, c, p_base, K, u_base, D, scale) -> (H, ∂H/∂y, A)``.
+        ``(w, ℓ, b, c, p_base, K, u_base, D, scale) -> (g, ∂g/∂y, A)``: the condition, its
+        exact gradient (reverse-mode AD) and the return map's Jacobian.
     """
 
     tr: Transcription
@@ -321,9 +327,17 @@ class AugmentedSystem:
         self, y: np.ndarray, b: np.ndarray, c: np.ndarray, par: Parametrisation
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``H(y)``, ``∂H/∂y`` and the return map's Jacobian ``A`` at ``y``."""
-        out = self.function(y[:-2], y[-2:], b, c, *par.inputs().values())
-        H, J, A = (np.asarray(v, dtype=float) for v in out)
-        return H.ravel(), J, A.reshape(self.tr.m, self.tr.m)
+        w, ell = y[:-2], y[-2:]
+        g, grad, A = self.function(w, ell, b, c, *par.inputs().values())
+        lam = ell * par.scale
+        F, F_w, F_p, F_u = (
+            np.asarray(v, dtype=float)
+            for v in self.tr.residual_jacobians(w, par.u(lam), par.p(lam))
+        )
+        F_ell = (F_p @ par.K + F_u @ par.D) * par.scale  # ∂F/∂ℓ = (F_p K + F_u D) diag(scale)
+        H = np.concatenate([F.ravel(), [float(g)]])
+        J = np.vstack([np.hstack([F_w, F_ell]), np.asarray(grad, dtype=float).ravel()])
+        return H, J, np.asarray(A, dtype=float).reshape(self.tr.m, self.tr.m)
 
 
 def augmented_system(
@@ -344,15 +358,16 @@ def _augmented_system(model_cls, disc, steps, kind, boundary) -> AugmentedSystem
     tr = transcription(model_cls, disc, steps)
     m, n_g, n_p, n_u = tr.m, tr.n_g, len(model_cls.parameter_specs()), len(model_cls.inputs)
     nb = border_size(kind, m)
-    w, ell = ca.SX.sym("w", tr.size), ca.SX.sym("ell", 2)
-    b, c = ca.SX.sym("b", nb), ca.SX.sym("c", nb)
-    p_base, K = ca.SX.sym("p_base", n_p), ca.SX.sym("K", n_p, 2)
-    u_base, D = ca.SX.sym("u_base", n_u), ca.SX.sym("D", n_u, 2)
-    scale = ca.SX.sym("scale", 2)
+    sym = ca.SX if disc.steps * len(tr.chain) <= _SX_MAX_STEPS else ca.MX
+    w, ell = sym.sym("w", tr.size), sym.sym("ell", 2)
+    b, c = sym.sym("b", nb), sym.sym("c", nb)
+    p_base, K = sym.sym("p_base", n_p), sym.sym("K", n_p, 2)
+    u_base, D = sym.sym("u_base", n_u), sym.sym("D", n_u, 2)
+    scale = sym.sym("scale", 2)
     lam = scale * ell
     p = p_base + K @ lam
     u = u_base + D @ lam
-    J_w, _, F, _ = _symbolic(tr.linearisation)(w, u, p)
+    J_w, _, _, _ = _symbolic(tr.linearisation, sym)(w, u, p)
     # A = P_s − P_z G_z⁻¹ G_s (implicit function theorem; gaitopt.stability.section_jacobians)
     G_s, G_z, P_s, P_z = J_w[:n_g, :m], J_w[:n_g, m:], J_w[n_g:, :m], J_w[n_g:, m:]
     A = P_s - P_z @ ca.solve(G_z, G_s) if n_g else P_s
@@ -360,7 +375,7 @@ def _augmented_system(model_cls, disc, steps, kind, boundary) -> AugmentedSystem
         if boundary is None or boundary[0] not in BOUNDARY_QUANTITIES:
             raise GaitoptInputError(f"a boundary curve needs one of {BOUNDARY_QUANTITIES}")
         what, k = boundary
-        _, dg, adm, durations = _symbolic(tr.checks)(w, u, p)
+        _, dg, adm, durations = _symbolic(tr.checks, sym)(w, u, p)
         g = {"duration": durations, "grazing": dg, "admissible": adm}[what][k]
     else:
         if nb == 0:
@@ -369,20 +384,19 @@ def _augmented_system(model_cls, disc, steps, kind, boundary) -> AugmentedSystem
                 f"so no Neimark–Sacker curve; follow PD or LP"
             )
         M = singular_matrix(kind, A)
-        bordered = ca.blockcat([[M, b], [c.T, ca.SX(1, 1)]])
+        bordered = ca.blockcat([[M, b], [c.T, sym(1, 1)]])
         rhs = ca.DM.zeros(nb + 1)
         rhs[nb] = 1
         g = ca.solve(bordered, rhs)[nb]
     y = ca.vertcat(w, ell)
-    H = ca.vertcat(F, g)
-    # F's Jacobian and g's gradient separately: reverse mode for the scalar g (one sweep through
-    # the second derivatives of the flow), not N forward directions.
-    J = ca.vertcat(ca.jacobian(F, y), ca.gradient(g, y).T)
+    # The scalar condition's gradient by reverse mode (one sweep through the second derivatives
+    # of the flow, not N forward directions); F's Jacobian comes from the transcription's own AD
+    # (``residual_jacobians``) and the chain rule through the affine parameter map.
     function = ca.Function(
-        f"augmented_{kind}",
+        f"condition_{kind}",
         [w, ell, b, c, p_base, K, u_base, D, scale],
-        [H, J, A],
+        [g, ca.gradient(g, y), A],
         ["w", "ell", "b", "c", "p_base", "K", "u_base", "D", "scale"],
-        ["H", "J", "A"],
+        ["g", "grad_g", "A"],
     )
     return AugmentedSystem(tr, kind, boundary, function)
