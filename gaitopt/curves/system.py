@@ -194,11 +194,13 @@ class Parametrisation:
         u0 = np.asarray(u0, dtype=float)
         D = np.zeros((u0.size, 2))
         nominal = model.nominal_input()
-        if u0.size and np.allclose(u0, nominal, rtol=0, atol=1e-15):
+        if u0.size and np.allclose(u0, nominal, rtol=1e-9, atol=1e-12):
             # A nominal input that is a parameter (the SLIP's touchdown angle) moves with it;
-            # nominal inputs are affine in the parameters (as in gaitopt.continuation).
+            # nominal inputs are affine in the parameters (as in gaitopt.continuation), so a
+            # large difference step is exact up to rounding.
+            u0 = nominal
             for i, path in enumerate(paths):
-                h = 1e-6 * max(abs(lam0[i]), 1e-3)
+                h = 1e-2 * max(abs(lam0[i]), 1e-3)
                 try:
                     up = model.replace(**path.values(lam0[i] + h)).nominal_input()
                     D[:, i] = (up - nominal) / h
