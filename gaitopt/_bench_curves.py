@@ -130,7 +130,8 @@ def table(result: dict[str, Any]) -> str:
             f"  30×30 grid: {r['grid_points']} solves, {r['grid_seconds']:.1f} s "
             f"(problems/compass_gait_stability_map.py: guesses + map sweep)",
             f"  boundary error vs the exact PD at {r['compared_at_ratios']} ratios: grid "
-            f"{r['grid_boundary_max_error']:.1e} rad, curve {r['curve_boundary_max_error']:.1e} rad",
+            f"{r['grid_boundary_max_error']:.1e} rad, "
+            f"curve {r['curve_boundary_max_error']:.1e} rad",
             f"  speed-up: {r['speedup_warm']:.1f}× warm, {r['speedup_cold']:.1f}× cold "
             f"(goal ≥ 20×: {'met' if r['speedup_warm'] >= 20 else 'NOT met'})",
         ]

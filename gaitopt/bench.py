@@ -65,7 +65,7 @@ from typing import Any
 import numpy as np
 
 from . import _bench_baselines as baselines
-from . import _bench_branches
+from . import _bench_branches, _bench_curves
 from .files import write_json
 
 __all__ = ["main", "run"]
@@ -474,6 +474,11 @@ def run(
             record["branches"] = _bench_branches.run(quick=quick)
         except Exception as err:  # report, never sink the benchmark
             record["branches"] = {"skipped": f"{type(err).__name__}: {err}"}
+        log("[bench] two-parameter curves: compass-gait stability boundary vs the 30×30 grid")
+        try:
+            record["curves"] = _bench_curves.run(quick=quick)
+        except Exception as err:  # report, never sink the benchmark
+            record["curves"] = {"skipped": f"{type(err).__name__}: {err}"}
     record["elapsed_s"] = time.perf_counter() - started
     return record
 
@@ -899,6 +904,9 @@ def format_table(record: dict[str, Any]) -> str:
     if "branches" in record:
         b = record["branches"]
         lines += ["", _bench_branches.table(b) if "skipped" not in b else f"branches: {b}"]
+    if "curves" in record:
+        c = record["curves"]
+        lines += ["", _bench_curves.table(c) if "skipped" not in c else f"curves: {c}"]
     lines.append(f"Total benchmark time: {record['elapsed_s']:.0f} s.")
     return "\n".join(lines)
 
