@@ -21,7 +21,7 @@ from typing import Any, ClassVar
 import casadi as ca
 import numpy as np
 
-from .errors import StateError
+from .errors import FrozenModelError, StateError
 from .parameters import ParameterSpec, check_parameter, parameter_specs
 
 __all__ = ["Transition", "Constraint", "Phase", "Section", "HybridModel", "Symbols"]
@@ -302,6 +302,8 @@ class HybridModel:
     _cache: ClassVar[dict[type, _Structure]] = {}
 
     def __post_init__(self) -> None:
+        if type(self).__setattr__ is not _frozen_setattr:  # see _frozen_setattr
+            type.__setattr__(type(self), "__setattr__", _frozen_setattr)
         for spec in self.parameter_specs():
             value = check_parameter(self.name, spec, getattr(self, spec.name))
             object.__setattr__(self, spec.name, value)
@@ -453,3 +455,22 @@ class HybridModel:
         """Project a phase-0 state onto the section coordinates (pick the named entries)."""
         idx = [self.state_names.index(c) for c in self.section.coordinates]
         return np.asarray(x, dtype=float)[idx]
+
+
+def _frozen_setattr(self: HybridModel, name: str, value: Any) -> None:
+    """``HybridModel.__setattr__``: models are immutable; raise
+    :class:`~gaitopt.errors.FrozenModelError` saying how to change a parameter.
+
+    ``@dataclass(frozen=True)`` gives each model class its own ``__setattr__`` (whose message
+    says only "cannot assign to field"); :meth:`HybridModel.__post_init__` replaces it with this
+    one."""
+    cls = type(self)
+    if name in {s.name for s in cls.parameter_specs()}:
+        raise FrozenModelError(
+            f"cannot assign to {cls.__name__}.{name}: models are immutable; make a new one with "
+            f"model.replace({name}={value!r}) or gaitopt.model({cls.name!r}, {name}={value!r})"
+        )
+    raise FrozenModelError(
+        f"cannot assign to {cls.__name__}.{name}: models are immutable; change a parameter with "
+        f"model.replace(NAME=VALUE)"
+    )

@@ -291,11 +291,25 @@ def simulate(
     -------
     Simulation
     """
+    # -- arguments: every check before any work (issue 9: bad input fails fast) ----------------
+    from .arguments import check_count, check_inputs, check_positive, check_start
+    from .errors import MAX_SIMULATION_STEPS
+    from .models import as_model
+
+    model = as_model(model)
     if method not in _METHODS:
         raise GaitoptInputError(f"`method` must be one of {', '.join(_METHODS)}, got {method!r}")
-    if int(steps) != steps or steps < 0:
-        raise GaitoptInputError(f"`steps` must be a non-negative integer, got {steps!r}")
+    steps = check_count(
+        "steps", steps, 0, MAX_SIMULATION_STEPS, "time and memory grow with every step "
+        "(gaitopt.errors.MAX_SIMULATION_STEPS); simulate in pieces, each from the last state"
+    )  # fmt: skip
+    phase = check_count("phase", phase, 0, len(model.phases) - 1, f"{model.name} has "
+                        f"{len(model.phases)} phase(s), numbered from 0")  # fmt: skip
+    rtol, atol = check_positive("rtol", rtol, "1e-11"), check_positive("atol", atol, "1e-12")
+    max_phase_time = check_positive("max_phase_time", max_phase_time, "30")
     x = _initial_state(model, x0, phase)
+    u0 = model.nominal_input() if callable(inputs) else check_inputs(model, inputs)
+    check_start(model, x, u0, phase, "x0" if x0 is not None else "the default start")
     policy = _as_policy(model, inputs)
     step_parameters: list[dict[str, float]] = []
 
