@@ -13,7 +13,7 @@
     gaitopt continue MODEL --param NAME --to VALUE [--set ...] [--guess ...] [--steps K]
                            [--both] [--no-cascade] [--max-period K] [--out DIR] [--json]
 
-Exit status (DESIGN.md, public contract): 0 gait found / simulation completed; 1 no gait found
+Exit status (docs/design.md, public contract): 0 gait found / simulation completed; 1 no gait found
 (the JSON is still printed, with ``success: false``) or the simulation did not complete; 2 bad
 input, reported as one line on stderr that starts with ``gaitopt: error:``, names the argument,
 shows the value and suggests a fix.
@@ -35,6 +35,7 @@ import json
 import math
 import os
 import sys
+import warnings
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,9 +43,17 @@ from typing import Any, NoReturn
 
 import numpy as np
 
-from . import cli_optimize
+from . import cli_linkage, cli_optimize
 from .continuation import Branch, continuation
-from .errors import GaitoptInputError, GuessError, ParameterError, StateError, did_you_mean
+from .errors import (
+    MAX_ORBIT_STEPS,
+    MAX_SIMULATION_STEPS,
+    GaitoptInputError,
+    GuessError,
+    ParameterError,
+    StateError,
+    did_you_mean,
+)
 from .files import jsonable
 from .hybrid import HybridModel
 from .models import REGISTRY
@@ -74,6 +83,15 @@ class _Parser(argparse.ArgumentParser):
         prefix = f"{where}: " if where else ""
         self.exit(EXIT_BAD_INPUT, f"{PROG}: error: {prefix}{message}; see `{self.prog} --help`\n")
 
+    def _get_values(self, action: argparse.Action, arg_strings: list[str]) -> Any:
+        """``--opt=--``: the value is the text ``--`` (argparse would drop it and store ``[]``,
+        a list where a string is expected)."""
+        if action.nargs is None and arg_strings == ["--"]:
+            value = self._get_value(action, "--")
+            self._check_value(action, value)
+            return value
+        return super()._get_values(action, arg_strings)
+
 
 @dataclass(frozen=True)
 class Subcommand:
@@ -95,8 +113,9 @@ class Subcommand:
 
 
 # -- small parsers -------------------------------------------------------------------------------
-def _count(minimum: int) -> Callable[[str], int]:
-    """An argparse ``type`` accepting integers ``>= minimum``."""
+def _count(minimum: int, maximum: int | None = None, why: str = "") -> Callable[[str], int]:
+    """An argparse ``type`` accepting integers ``>= minimum`` (and ``<= maximum``: the limit and
+    ``why`` it is there are stated when it is exceeded)."""
 
     def parse(text: str) -> int:
         try:
@@ -105,9 +124,19 @@ def _count(minimum: int) -> Callable[[str], int]:
             value = minimum - 1
         if value < minimum:
             raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {text!r}")
+        if maximum is not None and value > maximum:
+            raise argparse.ArgumentTypeError(
+                f"{text!r} is above the limit {maximum}" + (f": {why}" if why else "")
+            )
         return value
 
     return parse
+
+
+#: Why ``--steps`` (solve, continue) and ``--max-period`` stop at :data:`MAX_ORBIT_STEPS`.
+_ORBIT_LIMIT = "the shooting system of a period-k orbit grows faster than k"
+#: Why ``simulate --steps`` stops at :data:`MAX_SIMULATION_STEPS`.
+_SIMULATION_LIMIT = "time and memory grow with every step; simulate in pieces"
 
 
 def _split(option: str, item: str, examples: Mapping[str, str]) -> tuple[str, str]:
@@ -244,12 +273,28 @@ def parse_x0(model: HybridModel, items: Sequence[str] | None) -> np.ndarray:
                 f"{did_you_mean(name, states)}--x0 takes {takes}"
             )
     x0 = {name: value for name, (_, value) in parsed.items()}
+    if set(x0) <= set(coordinates):
+        _check_point(model, "--x0", items or (), x0)
     try:
         if set(x0) <= set(coordinates):
             return model.lift(x0)
         return model.state_vector(x0)
     except StateError as exc:
         raise InputError(f"{_echo('--x0', items or ())}: {exc}; --x0 takes {takes}") from None
+
+
+def _check_point(
+    model: HybridModel, option: str, items: Sequence[str], point: Mapping[str, float]
+) -> None:
+    """A section point typed in (``--x0``, ``--target``, ``--from``) must exist at the model's
+    parameters (the SLIP's apex below its energy height; see
+    :func:`gaitopt.control.check_section_point`)."""
+    from .control import check_section_point
+
+    try:
+        check_section_point(model, point, option.lstrip("-"), label=_echo(option, items))
+    except GaitoptInputError as exc:
+        raise InputError(str(exc)) from None
 
 
 # -- output --------------------------------------------------------------------------------------
@@ -359,10 +404,11 @@ def _gait_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--steps",
-        type=_count(1),
+        type=_count(1, MAX_ORBIT_STEPS, _ORBIT_LIMIT),
         default=1,
         metavar="K",
-        help="returns to the section per orbit (2: a period-2 gait; default 1)",
+        help=f"returns to the section per orbit (2: a period-2 gait; default 1, at most "
+        f"{MAX_ORBIT_STEPS})",
     )
 
 
@@ -427,10 +473,10 @@ def _simulate_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--steps",
-        type=_count(1),
+        type=_count(1, MAX_SIMULATION_STEPS, _SIMULATION_LIMIT),
         default=10,
         metavar="N",
-        help="returns to the section to simulate (default 10)",
+        help=f"returns to the section to simulate (default 10, at most {MAX_SIMULATION_STEPS})",
     )
     parser.add_argument(
         "--controller",
@@ -552,6 +598,8 @@ def run_simulate(args: argparse.Namespace) -> int:
     x0 = parse_x0(model, args.x0)
     terrain = parse_terrain(model, args.terrain)
     target = parse_guess(model, args.target) if args.target else None
+    if target is not None:
+        _check_point(model, "--target", args.target, target)
     try:
         simulated, policy, controller = _simulation_controller(model, args.controller, target)
     except _NoGait as exc:
@@ -675,6 +723,8 @@ def run_control(args: argparse.Namespace) -> int:
     guess = parse_guess(model, args.guess)
     target = parse_guess(model, args.target) if args.target else None
     if target is not None:
+        _check_point(model, "--target", args.target, target)
+    if target is not None:
         target = {**{k: v for k, v in model.default_start().items()}, **target}
     options: dict[str, Any] = {}
     q, r = _numbers("--q", args.q), _numbers("--r", args.r)
@@ -698,6 +748,7 @@ def run_control(args: argparse.Namespace) -> int:
                     f"coordinates {', '.join(repr(c) for c in coordinates)} (the other states "
                     f"follow from the section)"
                 )
+        _check_point(model, "--from", args.start, {n: v for n, (_, v) in start.items()})
     try:
         with _solver_output_to_stderr():
             controller = design_controller(model, args.kind, guess=guess, target=target, **options)
@@ -781,10 +832,11 @@ def _continue_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--max-period",
-        type=_count(1),
+        type=_count(1, MAX_ORBIT_STEPS, _ORBIT_LIMIT),
         default=8,
         metavar="K",
-        help="deepest period of the period-doubling cascade (default 8)",
+        help=f"deepest period of the period-doubling cascade (default 8, at most "
+        f"{MAX_ORBIT_STEPS})",
     )
     parser.add_argument(
         "--out",
@@ -831,20 +883,52 @@ def run_continue(args: argparse.Namespace) -> int:
         raise InputError(f"{_echo('--guess', args.guess or ()) or '--guess'}: {exc}") from None
     except ParameterError as exc:
         raise InputError(f"--param {args.param} --to {args.to}: {exc}") from None
-    if args.out:
-        _write_branch(branch, Path(args.out))
+    written = write_outputs(args.out, lambda folder: _write_branch(branch, folder))
     if args.json:
         _print_json(branch.as_dict())
     else:
         _print_branch(branch)
+    if written is not None:
+        print(written, file=sys.stderr)
+        return EXIT_BAD_INPUT
     return EXIT_OK if branch.success else EXIT_NOT_FOUND
+
+
+def write_outputs(out: str | None, write: Callable[[Path], None]) -> str | None:
+    """Write a subcommand's files into ``--out`` after its computation, never losing them.
+
+    ``--out`` was checked before the computation (:func:`main`); if writing still fails (the
+    directory was removed or filled meanwhile) the files go to a fresh fallback directory
+    (:func:`gaitopt.files.write_or_fall_back`).
+
+    Returns
+    -------
+    str or None
+        None if the files are in ``--out`` (or there is no ``--out``); otherwise the one-line
+        error to print on stderr, saying where the files are: the caller prints it after its
+        results and exits with status 2.
+    """
+    from .files import write_or_fall_back
+
+    if not out:
+        return None
+    try:
+        folder, error = write_or_fall_back(out, write, prefix=f"{PROG}-out-")
+    except OSError as exc:
+        return f"{PROG}: error: --out {out}: cannot write there, nor to a fallback folder ({exc})"
+    if error is None:
+        return None
+    reason = " ".join(str(error).split())
+    return (
+        f"{PROG}: error: --out {out}: cannot write there ({reason}); the results were written "
+        f"to {folder} instead"
+    )
 
 
 def _write_branch(branch: Branch, folder: Path) -> None:
     from .files import write_csv, write_json
     from .plotting import plot_branch, save_figure
 
-    folder.mkdir(parents=True, exist_ok=True)
     write_json(branch.as_dict(), folder / "branch.json")
     if branch.cycles:
         write_csv(*branch.csv_rows(), folder / "branch.csv")
@@ -896,23 +980,41 @@ SUBCOMMANDS: dict[str, Subcommand] = {
         _continue_arguments,
         run_continue,
     ),
+    "linkage": Subcommand(cli_linkage.HELP, cli_linkage.add_arguments, cli_linkage.run),
     "optimize": Subcommand(cli_optimize.HELP, cli_optimize.add_arguments, cli_optimize.run),
 }
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``gaitopt`` argument parser, one subparser per entry of :data:`SUBCOMMANDS`."""
+    from . import __version__
+
     parser = _Parser(
         prog=PROG,
         description="Gaits of simple legged-locomotion models as periodic orbits of hybrid "
         "systems. Exit status: 0 found, 1 not found, 2 bad input.",
     )
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name, command in SUBCOMMANDS.items():
         sub = commands.add_parser(name, help=command.help, description=command.help)
         command.add_arguments(sub)
         sub.set_defaults(run=command.run)
     return parser
+
+
+def _check_out(args: argparse.Namespace) -> None:
+    """``--out DIR`` of any subcommand: checked before the computation, so that an unusable path
+    fails in a second instead of after a long run (:func:`gaitopt.files.check_output_folder`)."""
+    out = getattr(args, "out", None)
+    if out is None:
+        return
+    from .files import check_output_folder
+
+    try:
+        check_output_folder(out)
+    except GaitoptInputError as exc:
+        raise InputError(f"--out {out}: {exc}") from None
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -934,10 +1036,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # usage errors (2) and --help (0) exit from inside argparse
         return exc.code if isinstance(exc.code, int) else EXIT_BAD_INPUT
     try:
-        return args.run(args)
+        _check_out(args)
+        with warnings.catch_warnings():
+            # The results say in words what went wrong; NumPy's and SciPy's numerical warnings
+            # (an overflow while a diverging guess is simulated) would only add lines to stderr.
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return args.run(args)
     except InputError as exc:
         message = " ".join(str(exc).split())  # one line, whatever the message holds
         print(f"{PROG}: error: {message}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except GaitoptInputError as exc:  # raised by the library, wherever the input reached it
+        message = " ".join(str(exc).split())
+        print(f"{PROG}: error: {args.command}: {message}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except BrokenPipeError:  # `gaitopt ... | head`: the reader left; say nothing more
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
