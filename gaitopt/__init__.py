@@ -24,6 +24,7 @@ from .errors import (
 from .hybrid import HybridModel, Phase, Section, Transition
 from .models import REGISTRY, model
 from .optimize import OptimalGait, optimize_gait
+from .orbits import orbital_distance
 from .result import LimitCycle, OrbitArc
 from .shooting import MultipleShooting, find_limit_cycle
 from .simulation import Simulation, simulate
@@ -43,6 +44,7 @@ __all__ = [
     "LimitCycle",
     "OrbitArc",
     "simulate",
+    "orbital_distance",
     "optimize_gait",
     "OptimalGait",
     "Simulation",
