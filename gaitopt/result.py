@@ -128,8 +128,9 @@ class LimitCycle:
     def as_dict(self, timing: bool = True) -> dict[str, Any]:
         """The JSON object of ``gaitopt solve --json`` (the public contract in the README).
 
-        Numbers that do not exist are ``None`` (JSON ``null``): the ``period`` unless every phase
-        duration is positive and finite (a failed search has no period), non-finite values.
+        Numbers that do not exist are ``None`` (JSON ``null``): the ``period`` of a failed search
+        (a rejected candidate orbit has no period; its ``durations`` are kept as the evidence),
+        and any period unless every phase duration is positive and finite; non-finite values.
 
         Parameters
         ----------
@@ -146,7 +147,7 @@ class LimitCycle:
             "params": self.model.params,
             "success": bool(self.success),
             "message": self.message,
-            "period": _num(self.period) if has_period else None,
+            "period": _num(self.period) if self.success and has_period else None,
             "steps": int(self.steps),
             "state_names": list(self.state_names),
             "fixed_point": {k: _num(v) for k, v in self.fixed_point.items()},

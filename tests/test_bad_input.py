@@ -160,14 +160,16 @@ def test_failed_direct_search_reports_no_period(name, params):
         assert all(d is None or d > 0 for d in report["durations"])
 
 
-def test_as_dict_period_only_from_positive_finite_durations():
+def test_as_dict_period_only_for_a_gait_with_positive_finite_durations():
     model = gaitopt.model("compass_gait")
-    for durations in ([-9.19], [0.3, -1e149], [float("-inf")], [float("nan")], []):
+    for durations in ([-9.19], [0.3, -1e149], [float("-inf")], [float("nan")], [], [4.65e-8]):
         failed = gaitopt.LimitCycle(False, "x", model, period=float(np.sum(durations or [0])),
                                     durations=np.array(durations))  # fmt: skip
         report = failed.as_dict()
-        assert report["period"] is None
+        assert report["period"] is None  # a rejected candidate orbit has no period
         json.dumps(report, allow_nan=False)  # strict JSON
+    found = gaitopt.LimitCycle(True, "x", model, period=0.7, durations=np.array([0.7]))
+    assert found.as_dict()["period"] == 0.7
 
 
 def test_no_orbit_message_never_quotes_a_residual_within_tolerance():
