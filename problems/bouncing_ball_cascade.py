@@ -100,7 +100,9 @@ def main(argv: list[str] | None = None) -> int:
 
     fig, (ax, ax_mult) = plot_branch(branch, coordinate="phase")
     d = np.array(diagram)
-    ax.scatter(d[:, 0], d[:, 1], s=0.4, color="0.6", zorder=0, lw=0)
+    ax.scatter(
+        d[:, 0], d[:, 1], s=0.3, color="0.75", alpha=0.6, zorder=0, lw=0, label="orbit diagram"
+    )
     for x, name in (
         (sn, "Γ_SN"),
         (pd, "Γ_PD exact"),
@@ -108,9 +110,18 @@ def main(argv: list[str] | None = None) -> int:
     ):
         for a in (ax, ax_mult):
             a.axvline(x, color="C3" if "exact" in name else "C2", lw=0.7, ls="--")
-        ax.text(x, ax.get_ylim()[1], f" {name}", fontsize=7, va="top", rotation=90)
+        ax.annotate(
+            name,
+            (x, 0.98),
+            xycoords=("data", "axes fraction"),
+            xytext=(2, 0),
+            textcoords="offset points",
+            fontsize=7,
+            va="top",
+            rotation=90,
+        )
     ax.set_xlim(1.0, top)
-    ax_mult.set_ylim(0, 3)
+    ax_mult.set_ylim(0.05, 3)
     ax.set_ylabel("impact phase ωt (rad)")
     ax.set_title(
         f"Ball on a vibrating table, e = {ball.restitution:g}: period-1 window and cascade "

@@ -128,10 +128,10 @@ def main(argv: list[str] | None = None) -> int:
                 data[:, 0],
                 data[:, 1],
                 ".",
-                ms=3,
-                color="k",
-                alpha=0.6,
-                zorder=4,
+                ms=1.5,
+                color="0.55",
+                alpha=0.5,
+                zorder=1,  # under the continuation branches, which stay visible
                 label=f"simulation, last {n_keep} of {n_steps} steps",
             )
             top.legend(fontsize=8)

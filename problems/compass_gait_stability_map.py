@@ -434,11 +434,11 @@ def _figure(slopes, ratios, max_mu, status, stance_dots, swing_dots, basin, gait
         shading="flat",
     )
     bar = fig.colorbar(mesh, ax=left)
-    bar.set_label(r"$\log_{10}$ max |multiplier| of the period-1 gait")
+    bar.set_label(r"$\log_{10}$ largest Floquet multiplier modulus $|\lambda|$ (dimensionless)")
     S, R = np.meshgrid(slopes, ratios, indexing="ij")
     if np.isfinite(shown).sum() > 3 and np.nanmin(shown) < 0 < np.nanmax(shown):
         left.contour(S, R, shown, levels=[0.0], colors="k", linewidths=1.8)
-        left.plot([], [], "-", color="k", lw=1.8, label="stability limit (|μ|max = 1)")
+        left.plot([], [], "-", color="k", lw=1.8, label=r"stability limit ($|\lambda|_{max}$ = 1)")
     none = status == 0
     other = status == 2
     if none.any():
@@ -456,7 +456,7 @@ def _figure(slopes, ratios, max_mu, status, stance_dots, swing_dots, basin, gait
     )
     left.set_yscale("log")
     left.set_xlabel(r"slope $\gamma$ (rad)")
-    left.set_ylabel(r"mass ratio $\mu = m_H/m$ (mass_hip / mass_leg, mass_leg = 5 kg)")
+    left.set_ylabel(r"mass ratio $\mu = m_H/m$, $m$ = 5 kg (dimensionless)")
     left.set_title(
         "Period-1 passive gait: stability over (slope, mass ratio)\n"
         "(cf. Goswami, Thuilot & Espiau 1998)",

@@ -112,10 +112,11 @@ def main(argv: list[str] | None = None) -> int:
                 conv_rows.append([k1, first, n, float(v)])
             ax_.plot(speeds, "o-", ms=3, color=f"C{j}", label=f"κ1 = {label}")
         ax_.axhline(-juggler.desired_speed, color="k", lw=0.7, ls=":")
-        ax_.set_xlabel("impact n")
+        ax_.set_xlabel("impact count n (dimensionless)")
         ax_.set_title(f"from ḃ = {first:g} m/s", fontsize=9)
         ax_.grid(alpha=0.3)
-    axes[0].set_ylabel("pre-impact velocity ḃ[n] (m/s)")
+    for ax_ in axes:
+        ax_.set_ylabel("pre-impact velocity ḃ[n] (m/s)")
     axes[1].legend(fontsize=7)
     save_figure(fig, out / "convergence.png")
     write_csv(["kappa1", "start", "impact", "b_dot"], conv_rows, out / "convergence.csv")

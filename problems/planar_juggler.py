@@ -170,8 +170,8 @@ def main(argv: list[str] | None = None) -> int:
     axes[1].semilogy(
         k, np.linalg.norm([0.1, 0.3, 1.5]) * rho0**k, "k:", label=f"|λ|ⁿ = {rho0:.3f}ⁿ"
     )
-    axes[1].set_xlabel("impact n")
-    axes[1].set_ylabel("‖section state − fixed point‖")
+    axes[1].set_xlabel("impact count n (dimensionless)")
+    axes[1].set_ylabel("‖section state − fixed point‖ (m and m/s mixed; SI)")
     axes[1].legend(fontsize=7)
     axes[1].grid(alpha=0.3)
     axes[0].plot(0, 0, "ks", ms=5)

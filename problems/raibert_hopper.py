@@ -234,7 +234,11 @@ def main(argv: list[str] | None = None) -> int:
     ax.step(hop[:-1], schedule, where="post", color="0.5", label="desired speed ẋ_d")
     ax.step(hop[:-1], steady, "--", where="post", color="C1", label="closed-loop gait's speed")
     ax.plot(hop, track[:, coords.index("x_dot")], "o-", ms=3, color="C0", label="apex speed")
-    ax.set(xlabel="hop", ylabel="forward speed (m/s)", title="Raibert hopper: speed tracking")
+    ax.set(
+        xlabel="hop count n (dimensionless)",
+        ylabel="forward speed ẋ (m/s)",
+        title="Raibert hopper: speed tracking",
+    )
     ax.legend(fontsize=8)
     save_figure(fig, out / "speed_tracking.png")
     plt.close(fig)
@@ -242,7 +246,11 @@ def main(argv: list[str] | None = None) -> int:
     fig, ax = plt.subplots(figsize=(5.6, 3.6), layout="constrained")
     ax.semilogy(dist, "o-", ms=3, label="|apex state − gait|")
     ax.semilogy(dist[0] * slowest ** np.arange(len(dist)), "--", label=f"|λ|max = {slowest:.3f}")
-    ax.set(xlabel="hop", ylabel="distance", title="Recovery from a push (ẋ +0.3 m/s, φ̇ +2 rad/s)")
+    ax.set(
+        xlabel="hop count n (dimensionless)",
+        ylabel="distance to the gait (SI units, mixed)",
+        title="Recovery from a push (ẋ +0.3 m/s, φ̇ +2 rad/s)",
+    )
     ax.legend(fontsize=8)
     save_figure(fig, out / "push.png")
     plt.close(fig)

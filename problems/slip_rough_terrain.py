@@ -7,7 +7,7 @@ running speed constant" (the swing-leg angle as a function of time since apex, s
 at any ground height gives the deadbeat angle); Seyfarth, Geyer & Herr 2003 (swing-leg
 retraction); python-control's ``dlqr`` for the LQR gain.
 
-Setup (``gaitopt.model("slip")`` at DESIGN.md's defaults, k̃ = 10.7, Ẽ = 1.61): the runner is to
+Setup (``gaitopt.model("slip")`` at docs/design.md's defaults, k̃ = 10.7, Ẽ = 1.61): the runner is to
 hold the apex height z* = 1.0 m (nominal touchdown angle solved so that z* is a fixed point; the
 passive gait there is unstable, multiplier ≈ 1.98).  Every step the ground under the next
 touchdown is drawn uniformly within ±A of level (seeded, :func:`gaitopt.terrain.random_terrain`);
@@ -56,6 +56,9 @@ from gaitopt.files import write_csv, write_json
 STUDY = "slip_rough_terrain"
 TARGET = 1.0  # m, apex height to hold
 START_OFFSET = 0.03  # m, perturbed first apex
+# Marker and line style per controller: overlapping curves (deadbeat and blind agree on level
+# ground) stay visible.
+_STYLES = ("o-", "s--", "^-.", "D:", "v-")
 CONTROLLERS = ("open loop", "open loop, passive gait", "lqr", "deadbeat", "blind")
 
 
@@ -171,8 +174,11 @@ def main(argv: list[str] | None = None) -> int:
         result = runs[(name, show_amp, 0)]
         ax.plot(
             result.section[:, 0],
-            "o-",
-            ms=3,
+            _STYLES[k % len(_STYLES)],
+            ms=6 - k,
+            mfc="none",
+            lw=1.0,
+            zorder=5 - k,
             color=f"C{k}",
             label=f"{name} ({result.survived} steps)",
         )
@@ -189,7 +195,7 @@ def main(argv: list[str] | None = None) -> int:
     terrain = gt.random_terrain(slip, 0, show_amp)
     axg.step(range(steps), [terrain.value(k) for k in range(steps)], where="post", color="0.3")
     axg.set_ylabel("ground (m)")
-    axg.set_xlabel("step")
+    axg.set_xlabel("step count n (dimensionless)")
     axg.grid(alpha=0.3)
     save_figure(fig, out / "apex_heights.png")
 
@@ -200,7 +206,7 @@ def main(argv: list[str] | None = None) -> int:
         ax.bar(np.arange(len(amplitudes)) + (k - 2) * width, mean, width, color=f"C{k}", label=name)
     ax.set_xticks(range(len(amplitudes)), [f"±{100 * a:g} cm" for a in amplitudes])
     ax.set_ylabel(f"steps survived (mean of {len(seeds)} seeds, max {steps})")
-    ax.set_xlabel("ground height change per step")
+    ax.set_xlabel("ground height change per step, amplitude (m, shown in cm)")
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3, axis="y")
     save_figure(fig, out / "survival.png")
@@ -209,12 +215,21 @@ def main(argv: list[str] | None = None) -> int:
     for k, name in enumerate(CONTROLLERS):
         e = np.maximum(convergence[name], 1e-13)
         note = " (from +3 cm, inside its basin)" if name == "open loop, passive gait" else ""
-        ax.semilogy(e, "o-", ms=4, color=f"C{k}", label=name + note)
+        # Distinct markers and dashes: the deadbeat and blind curves coincide where they agree.
+        ax.semilogy(
+            e,
+            _STYLES[k % len(_STYLES)],
+            ms=7 - k,
+            mfc="none",
+            zorder=5 - k,
+            color=f"C{k}",
+            label=name + note,
+        )
     lam = abs(design["lqr"].closed_loop_multipliers[0])
     prediction = f"LQR prediction |λ_cl|ⁿ = {lam:.3f}ⁿ"
     ax.semilogy(0.05 * lam ** np.arange(9), "k--", lw=0.8, label=prediction)
-    ax.set_xlabel("step")
-    ax.set_ylabel("|z − z*| (m)")
+    ax.set_xlabel("step count n (dimensionless)")
+    ax.set_ylabel("apex height error |z − z*| (m)")
     ax.set_ylim(1e-13, 1)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from ..errors import ParameterError, UnknownModelError, did_you_mean
 from ..hybrid import HybridModel
+from .ballistic_walker import BallisticWalker
 from .bouncing_ball import BouncingBall
 from .compass_gait import CompassGait
 from .five_link_biped import FiveLinkBiped
@@ -21,6 +22,7 @@ __all__ = [
     "REGISTRY", "model", "as_model", "BouncingBall", "CompassGait", "KneedWalker", "LineJuggler",
     "FiveLinkBiped",
     "PlanarJuggler",
+    "BallisticWalker",
     "RaibertHopper",
     "RimlessWheel", "SimplestWalker", "Slip", "VanDerPol",
     "VerticalHopper",
@@ -41,6 +43,7 @@ REGISTRY: dict[str, type[HybridModel]] = {
         BouncingBall,
         LineJuggler,
         PlanarJuggler,
+        BallisticWalker,
     )
 }
 
