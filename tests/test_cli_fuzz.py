@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import signal
 import warnings
 
@@ -37,6 +38,9 @@ PARSER = cli.build_parser()
 SUBPARSERS: dict[str, argparse.ArgumentParser] = next(
     a for a in PARSER._actions if isinstance(a, argparse._SubParsersAction)
 ).choices
+#: Subcommands fuzzed: all of them, except any named in GAITOPT_FUZZ_SKIP (comma-separated), for
+#: a long run while a defect already found in one subcommand awaits its fix.
+COMMANDS = sorted(set(SUBPARSERS) - set(os.environ.get("GAITOPT_FUZZ_SKIP", "").split(",")))
 MODELS = list(gaitopt.REGISTRY)
 LINKAGES = list(getattr(importlib.import_module("gaitopt.linkage"), "LINKAGES", {}))
 PARAMETERS = sorted({s.name for c in gaitopt.REGISTRY.values() for s in c.parameter_specs()})
@@ -154,7 +158,7 @@ def _cheap(argv: list[str]) -> bool:
 
 @st.composite
 def command_lines(draw) -> list[str]:
-    command = draw(st.sampled_from(sorted(SUBPARSERS)))
+    command = draw(st.sampled_from(COMMANDS))
     sub = SUBPARSERS[command]
     argv = [command]
     for action in _positionals(sub):
