@@ -305,6 +305,8 @@ def test_make_gaits_cycle_json_holds_no_run_to_run_timing(tmp_path, capsys):
         # Dask's ValueError for an address without a port
         (["solve", "vanderpol", "--starts", "2", "--scheduler", ""], "argument --scheduler"),
         (["solve", "vanderpol", "--starts", "2", "--scheduler", "nowhere"], "'nowhere'"),
+        # NumPy's ValueError for a negative seed of the multi-start sample
+        (["solve", "vanderpol", "--starts", "2", "--seed", "-1"], "argument --seed"),
     ],
     ids=lambda v: " ".join(v) if isinstance(v, list) else "",
 )

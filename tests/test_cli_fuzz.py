@@ -149,11 +149,14 @@ def _cheap(argv: list[str]) -> bool:
         return True
     if command not in ("solve", "simulate") or len(argv) < 2 or argv[1] not in FAST_MODELS:
         return False
-    risky = {"--set", "--starts", "--scheduler", "--controller", "--target", "--terrain",
-             "--method"}  # fmt: skip
-    steps = [argv[i + 1] for i, a in enumerate(argv[:-1]) if a == "--steps"]
-    few = all(s.strip().isdigit() and int(s) <= (2 if command == "solve" else 50) for s in steps)
-    return few and not risky.intersection(argv)
+    risky = {"--set", "--scheduler", "--controller", "--target", "--terrain", "--method"}
+
+    def few(option: str, most: int) -> bool:
+        values = [argv[i + 1] for i, a in enumerate(argv[:-1]) if a == option]
+        return all(v.strip().isdigit() and int(v) <= most for v in values)
+
+    small = few("--steps", 2 if command == "solve" else 50) and few("--starts", 2)
+    return small and not risky.intersection(argv)
 
 
 @st.composite
