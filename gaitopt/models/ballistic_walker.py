@@ -284,9 +284,10 @@ class BallisticWalker(HybridModel):
         """
         fun, pts = self._functions()
         a = self.alpha
-        if guess is None:
-            _, thigh0, shank0 = self.toe_off_angles()
-            guess = np.array([2 * a / time, (a - thigh0) / time, (a - shank0) / time])
+        _, thigh0, shank0 = self.toe_off_angles()
+        rough = np.array([2 * a / time, (a - thigh0) / time, (a - shank0) / time])
+        if guess is None or not np.all(np.isfinite(guess)):
+            guess = rough
 
         def residual(rates):
             if not np.all(np.isfinite(rates)):
@@ -304,10 +305,11 @@ class BallisticWalker(HybridModel):
             path = np.arange(0.3, time, 0.05 if time > 0.3 else -0.05)
             for t_k in path:
                 step = self.swing(float(t_k), guess, samples=3, continued=True)
-                guess = step.rates
+                if step.success and np.all(np.isfinite(step.rates)):
+                    guess = step.rates
             rates = np.asarray(root(residual, np.asarray(guess), method="hybr", tol=1e-13).x)
         if not np.all(np.isfinite(rates)):
-            rates = np.asarray(guess, dtype=float)
+            rates = np.asarray(guess if np.all(np.isfinite(guess)) else rough, dtype=float)
         sol = self._integrate(rates, time, fun, dense=True)
         err = float(np.max(np.abs(sol.y[:3, -1] - a)))
         t = np.linspace(0.0, time, samples)
