@@ -19,6 +19,7 @@ import pytest
 import gaitopt
 from gaitopt.cli import main
 from gaitopt.optimize import Collocation, GaitProblem, RadauMesh, optimize_gait
+from gaitopt.optimize.collocation import Arc
 from gaitopt.optimize.verify import feedforward_of, simulated_cost
 
 LEVEL = {"period": 0.8, "step_length": 0.3}
@@ -53,6 +54,21 @@ def test_passive_gait_is_the_zero_effort_optimum(passive):
     np.testing.assert_allclose(
         np.sort_complex(gait.multipliers), np.sort_complex(cycle.multipliers), atol=1e-6
     )
+
+
+def test_free_parameter_recovers_the_passive_leg(passive):
+    # `free=("a",)`: the hip-to-leg-mass distance a is a decision variable.  Started at
+    # a = 0.45 m with the period and step length of the passive gait of a = 0.5 m (Drake),
+    # the least effort is zero, reached only by the passive gait itself (fixed point and two
+    # gait constraints fix the one free parameter): a = 0.5 to 1e-6, shooting's fixed point.
+    model, cycle, step = passive
+    gait = optimize_gait(model.replace(a=0.45), period=cycle.period, step_length=step, free=("a",))
+    assert gait.success, gait.message
+    assert gait.cost <= 1e-8
+    assert gait.params["a"] == pytest.approx(0.5, abs=1e-6)
+    x_opt = np.array([gait.fixed_point[n] for n in model.state_names])
+    x_ref = np.array([cycle.fixed_point[n] for n in model.state_names])
+    np.testing.assert_allclose(x_opt, x_ref, atol=1e-6)
 
 
 def test_level_ground_optimum_is_verified_and_converged(level):
@@ -111,9 +127,13 @@ def test_cost_converges_fast_under_refinement():
     assert d2 < d1 / 16
 
 
-def test_nlp_gradient_matches_finite_differences():
-    problem = GaitProblem(gaitopt.model("compass_gait", slope=0.0), cost="work", **LEVEL)
-    col = Collocation(problem, RadauMesh(3, 3))
+@pytest.mark.parametrize("structured", [False, True])
+def test_nlp_gradient_matches_finite_differences(structured):
+    model = gaitopt.model("compass_gait", slope=0.0)
+    problem = GaitProblem(model, cost="work", bounds={"hip_torque": 20.0}, **LEVEL)
+    # Slack powers, or the switching-time transcription (arcs + − + of free durations).
+    structure = [[Arc(1, (1,), 0.2), Arc(1, (-1,), 0.5), Arc(1, (1,), 0.3)]] if structured else None
+    col = Collocation(problem, RadauMesh(3, 3), structure)
     rng = np.random.default_rng(1)
     w = rng.uniform(0.1, 0.9, col.nlp["x"].shape[0])
     p = problem.model.p
@@ -161,6 +181,9 @@ def test_bad_input_is_one_error():
         optimize_gait(model, bounds={"hip": 1.0})
     with pytest.raises(gaitopt.GaitoptInputError, match="period"):
         optimize_gait(model, period=-1)
+    # Positive work has no minimum without input bounds (impulses approach its infimum).
+    with pytest.raises(gaitopt.GaitoptInputError, match="bound on every input"):
+        optimize_gait(model, cost="work", period=0.8)
 
 
 OPTIMIZE_KEYS = {

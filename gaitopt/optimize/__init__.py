@@ -11,7 +11,7 @@
 
 from __future__ import annotations
 
-from .collocation import Collocation, RadauMesh
+from .collocation import Arc, Collocation, RadauMesh
 from .problem import COSTS, GaitProblem
 from .profile import InputProfile
 from .result import Minimum, OptimalGait
@@ -23,6 +23,7 @@ __all__ = [
     "GaitProblem",
     "Collocation",
     "RadauMesh",
+    "Arc",
     "InputProfile",
     "OptimalGait",
     "Minimum",

@@ -10,6 +10,17 @@ uses the same points' Radau quadrature, exact for polynomials of degree ``2d −
 effort cost, exactly ``∫ u(t)² dt`` of the input profile.  Garg et al. 2010 (Automatica 46) give
 the LGR transcription of optimal control; Kelly 2017 (SIAM Review 59) the gait setting.
 
+Work-based costs are transcribed in two ways.  Without a ``structure``, with slack powers
+``pᵢ⁺ − pᵢ⁻ = uᵢωᵢ`` at the nodes: robust, but the quadrature of ``max(0, uᵢωᵢ)`` is only first
+order where the power changes sign or the input jumps inside a mesh interval.  With a
+``structure`` (an :class:`Arc` sequence per phase, found from that first solution), each phase is
+cut into arcs whose durations are decision variables; on each arc every input's power has a
+declared sign, ``σ uᵢωᵢ ≥ 0`` at the arc's nodes and its start, and the running cost is
+``Σ_{σ=+} uᵢωᵢ`` — a smooth integrand on each arc, so the quadrature keeps the collocation
+order and the cost is exactly the positive work of the profile (checked by simulation).  The
+switching times are where the optimum puts them (Betts 2010, "Practical Methods for Optimal
+Control", §4.7, phases at the switches of bang-bang and singular arcs).
+
 Linking (as in :mod:`gaitopt.shooting`): the first state is ``lift(s)`` on the section; each phase
 ends on its guard (crossing in the stated direction, admissibly); the reset of its end state,
 with the input at the end of the phase, is the next phase's first state; the last reset returns
@@ -28,7 +39,7 @@ import numpy as np
 from ..errors import GaitoptInputError
 from .problem import GaitProblem
 
-__all__ = ["RadauMesh", "Collocation", "lagrange_matrix", "Group"]
+__all__ = ["RadauMesh", "Collocation", "lagrange_matrix", "Group", "Arc"]
 
 
 _RATES: dict[tuple[int, int], tuple[ca.Function, Any, Any]] = {}
@@ -116,6 +127,25 @@ def _derivative_matrix(nodes: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
+class Arc:
+    """An arc of a phase in the switching-time transcription of a work-based cost.
+
+    Attributes
+    ----------
+    intervals : int
+        Mesh intervals on the arc (equal lengths).
+    signs : tuple of int
+        Per input, ``+1`` (positive power, counted in the cost) or ``−1`` (power ≤ 0, free).
+    fraction : float
+        Initial guess of the arc's share of the phase duration (1).
+    """
+
+    intervals: int
+    signs: tuple[int, ...]
+    fraction: float
+
+
+@dataclass(frozen=True)
 class Group:
     """A block of constraints, for reporting: name, slice of ``g``, and whether an equality."""
 
@@ -183,8 +213,11 @@ class Collocation:
         The constraint blocks, named for messages and the active set.
     """
 
-    def __init__(self, problem: GaitProblem, mesh: RadauMesh):
+    def __init__(
+        self, problem: GaitProblem, mesh: RadauMesh, structure: list[list[Arc]] | None = None
+    ):
         self.problem, self.mesh = problem, mesh
+        self.structure = structure
         model = problem.model
         self.model = model
         N, d = mesh.intervals, mesh.degree
@@ -221,8 +254,17 @@ class Collocation:
         p = ca.vertcat(*entries) if entries else p_in
         ulo, uhi = problem.input_bounds()
         work = problem.cost_kind in ("work", "cot")
+        if structure is not None:
+            if not work or len(structure) != len(self.chain):
+                raise GaitoptInputError("Collocation: a structure needs a work cost, one per phase")
+            for arcs in structure:
+                if sum(a.intervals for a in arcs) != N:
+                    raise GaitoptInputError(
+                        f"Collocation: the arcs of a phase must share its {N} mesh intervals"
+                    )
+        slack = work and structure is None
 
-        X, U, T, Pp, Pm = [], [], [], [], []
+        X, U, T, Pp, Pm, Th = [], [], [], [], [], []
         for k, i in enumerate(self.chain):
             n = phases[i].n
             lo, hi = problem.state_bounds_of(i)
@@ -235,7 +277,9 @@ class Collocation:
             T.append(B.add(f"T{k}", 1, 1, 1e-3, problem.max_phase_time))
             if self.implicit is not None:
                 B.add(f"A{k}", n // 2, N * d)
-            if work:
+            if structure is not None:
+                Th.append(B.add(f"Theta{k}", len(structure[k]), 1, 1e-6, 1.0))
+            if slack:
                 Pp.append(B.add(f"Pplus{k}", n_u, N * d, 0.0, np.inf))
                 Pm.append(B.add(f"Pminus{k}", n_u, N * d, 0.0, np.inf))
 
@@ -259,7 +303,15 @@ class Collocation:
             tr = phase.transitions[0]
             label = phase.name if len(self.chain) == 1 else f"{phase.name} #{k + 1}"
             Xk, Uk, Tk = X[k], U[k], T[k]
-            h = Tk / N
+            if structure is None:
+                hs = [Tk / N] * N
+            else:  # interval lengths from the arc fractions
+                add(f"arc fractions ({label})", ca.sum1(Th[k]) - 1.0)
+                hs = [
+                    Tk * Th[k][a] / arc.intervals
+                    for a, arc in enumerate(structure[k])
+                    for _ in range(arc.intervals)
+                ]
             Xc = Xk[:, 1:]
             if self.implicit is None:
                 F = phase.flow.map(N * d)(Xc, Uk, p)
@@ -274,7 +326,7 @@ class Collocation:
             defects = []
             for j in range(N):
                 Xi = Xk[:, j * d : j * d + d + 1]
-                defects.append(ca.mtimes(Xi, ca.DM(self.C)) - h * F[:, j * d : (j + 1) * d])
+                defects.append(ca.mtimes(Xi, ca.DM(self.C)) - hs[j] * F[:, j * d : (j + 1) * d])
             add(f"dynamics ({label})", ca.horzcat(*defects))
             x_end, u_end = Xk[:, -1], Uk[:, -1]
             add(f"guard '{tr.name}' at the end of {label}", tr.guard(x_end, u_end, p))
@@ -318,17 +370,49 @@ class Collocation:
             if step is not None:
                 step_vectors.append(step)
                 distance.append(ca.norm_2(step))
-            # Running cost by Radau quadrature: h Σ_intervals Σ_j w_j L_j.
-            wq = ca.DM(np.tile(self.weights, N))
-            if work:
+            # Running cost by Radau quadrature: Σ_intervals h_j Σ_c w_c L_c.
+            if structure is None:
+                hq, wq = Tk / N, ca.DM(np.tile(self.weights, N))
+            else:
+                hq, wq = 1.0, ca.vertcat(*[hs[j] * ca.DM(self.weights) for j in range(N)])
+            if slack:
                 rates = model.input_rates(i).map(N * d)(Xc, p)
                 power = Uk * rates
                 add(f"power split ({label})", Pp[k] - Pm[k] - power)
-                work_terms.append(h * ca.mtimes(ca.sum1(Pp[k]), wq))
-                effort_terms.append(h * ca.mtimes(ca.sum1(Uk**2), wq))
+                work_terms.append(hq * ca.mtimes(ca.sum1(Pp[k]), wq))
+                effort_terms.append(hq * ca.mtimes(ca.sum1(Uk**2), wq))
+            elif work:  # signed arcs: σ uᵢωᵢ ≥ 0 on each arc, cost Σ_{σ=+} uᵢωᵢ (exact)
+                rate_fn = model.input_rates(i)
+                power = Uk * rate_fn.map(N * d)(Xc, p)
+                signs = np.array(
+                    [arc.signs for arc in structure[k] for _ in range(arc.intervals)], dtype=float
+                ).T  # n_u × N
+                sigma = ca.DM(np.repeat(signs, d, axis=1))
+                add(f"power sign ({label})", sigma * power, 0.0, np.inf)
+                u0 = ca.DM(self.u_at_start)
+                starts_u = ca.horzcat(*[ca.mtimes(Uk[:, j * d : j * d + d], u0) for j in range(N)])
+                starts_x = ca.horzcat(*[Xk[:, j * d] for j in range(N)])
+                start_power = starts_u * rate_fn.map(N)(starts_x, p)
+                add(f"power sign at arc starts ({label})", ca.DM(signs) * start_power, 0.0, np.inf)
+                # Between the nodes too (the midpoints): the profile the simulator applies is
+                # the polynomial, whose power must keep its arc's sign and whose value must
+                # keep its bounds there as well.
+                mids = 0.5 * (self.tau[:-1] + self.tau[1:])
+                Lx = ca.DM(lagrange_matrix(self.tau, mids).T)
+                Lu = ca.DM(lagrange_matrix(self.tau[1:], mids).T)
+                xs = ca.horzcat(*[ca.mtimes(Xk[:, j * d : j * d + d + 1], Lx) for j in range(N)])
+                us = ca.horzcat(*[ca.mtimes(Uk[:, j * d : (j + 1) * d], Lu) for j in range(N)])
+                mid_power = us * rate_fn.map(N * d)(xs, p)
+                add(f"power sign between nodes ({label})", sigma * mid_power, 0.0, np.inf)
+                for r in range(n_u):
+                    if np.isfinite(uhi[r]):
+                        name = f"|{model.inputs[r]}| between nodes ({label})"
+                        add(name, us[r, :], ulo[r], uhi[r])
+                positive = ca.DM(np.repeat((signs > 0).astype(float), d, axis=1))
+                work_terms.append(ca.mtimes(ca.sum1(positive * power), wq))
             else:
                 L = ca.vertcat(*[problem.integrand(i, Xc[:, c], Uk[:, c], p) for c in range(N * d)])
-                cost_terms.append(h * ca.mtimes(L.T, wq))
+                cost_terms.append(hq * ca.mtimes(L.T, wq))
 
         period = ca.sum1(ca.vertcat(*T))
         total = ca.sum1(ca.vertcat(*distance)) if distance else ca.MX(0)
@@ -350,7 +434,7 @@ class Collocation:
         w = B.vector()
         self._w, self._p = w, p_in
         objective = J
-        if work and problem.regularisation > 0:
+        if slack and problem.regularisation > 0:
             # Positive work alone leaves singular arcs (inputs that chatter between the nodes);
             # a small effort term selects a smooth optimum.  The reported cost is J alone.
             objective = J + problem.regularisation * ca.sum1(ca.vertcat(*effort_terms))
@@ -367,6 +451,7 @@ class Collocation:
             "positive_work": ca.sum1(ca.vertcat(*work_terms)) if work else ca.MX(np.nan),
         }
         self._X, self._U, self._T = X, U, T
+        self._theta = Th
 
     # -- evaluation ---------------------------------------------------------------------------
     @cached_property
@@ -406,20 +491,49 @@ class Collocation:
             "T": np.array(
                 [float(self.blocks.get(w, f"T{k}")[0, 0]) for k in range(len(self.chain))]
             ),
+            "breaks": [self.breaks(self.theta_of(w, k), k) for k in range(len(self.chain))],
         }
 
-    def node_times(self) -> np.ndarray:
-        """Normalised times (0..1 of a phase) of the state nodes: start, then each interval's
-        Radau points."""
-        N = self.N
-        return np.concatenate([[0.0], ((np.arange(N)[:, None] + self.tau[1:]) / N).ravel()])
+    def theta_of(self, w: np.ndarray, k: int) -> np.ndarray | None:
+        """Arc fractions of phase ``k`` in ``w`` (None without a structure)."""
+        if self.structure is None:
+            return None
+        return self.blocks.get(np.asarray(w, dtype=float).ravel(), f"Theta{k}").ravel()
 
-    def evaluate(self, X: np.ndarray, U: np.ndarray, times: np.ndarray) -> tuple[np.ndarray, ...]:
-        """State and input polynomials of one phase at normalised ``times`` in [0, 1]."""
+    def breaks(self, theta: np.ndarray | None, k: int) -> np.ndarray:
+        """Normalised interval boundaries (0..1) of phase ``k`` for arc fractions ``theta``."""
+        if self.structure is None or theta is None:
+            return np.linspace(0.0, 1.0, self.N + 1)
+        lengths = [
+            theta[a] / arc.intervals
+            for a, arc in enumerate(self.structure[k])
+            for _ in range(arc.intervals)
+        ]
+        edges = np.concatenate([[0.0], np.cumsum(lengths)])
+        return edges / edges[-1]
+
+    def node_times(self, breaks: np.ndarray | None = None) -> np.ndarray:
+        """Normalised times (0..1 of a phase) of the state nodes: start, then each interval's
+        Radau points (``breaks``: the interval boundaries, uniform by default)."""
+        if breaks is None or self.structure is None:
+            N = self.N
+            return np.concatenate([[0.0], ((np.arange(N)[:, None] + self.tau[1:]) / N).ravel()])
+        inner = breaks[:-1, None] + np.diff(breaks)[:, None] * self.tau[1:]
+        return np.concatenate([[0.0], inner.ravel()])
+
+    def evaluate(
+        self, X: np.ndarray, U: np.ndarray, times: np.ndarray, breaks: np.ndarray | None = None
+    ) -> tuple[np.ndarray, ...]:
+        """State and input polynomials of one phase at normalised ``times`` in [0, 1]
+        (``breaks``: the phase's interval boundaries, uniform by default)."""
         N, d = self.N, self.d
         times = np.clip(np.asarray(times, dtype=float), 0.0, 1.0)
-        interval = np.minimum((times * N).astype(int), N - 1)
-        local = times * N - interval
+        if breaks is None or np.array_equal(breaks, np.linspace(0.0, 1.0, N + 1)):
+            interval = np.minimum((times * N).astype(int), N - 1)
+            local = times * N - interval
+        else:
+            interval = np.clip(np.searchsorted(breaks, times, side="right") - 1, 0, N - 1)
+            local = (times - breaks[interval]) / (breaks[interval + 1] - breaks[interval])
         xs = np.zeros((X.shape[0], times.size))
         us = np.zeros((U.shape[0], times.size))
         for i in np.unique(interval):
@@ -436,17 +550,28 @@ class Collocation:
         inputs: list[Any],
         durations: np.ndarray,
         p: np.ndarray,
+        thetas: list[np.ndarray] | None = None,
     ) -> np.ndarray:
         """A decision vector from callables ``states[k](τ) -> n × len(τ)`` and ``inputs[k](τ)``
-        per phase (normalised time ``τ``), durations and section coordinates.  Slack powers
-        are set to the split of the guessed power."""
+        per phase (normalised time ``τ``), durations and section coordinates (``thetas``: the
+        arc fractions of a structure, by default its guesses).  Slack powers are set to the
+        split of the guessed power."""
         B = self.blocks
         w = np.zeros(B.size)
         B.put(w, "s", s)
         B.put(w, "free", free)
-        tn = self.node_times()
-        work = self.problem.cost_kind in ("work", "cot")
+        work = self.problem.cost_kind in ("work", "cot") and self.structure is None
         for k, i in enumerate(self.chain):
+            theta = None
+            if self.structure is not None:
+                theta = (
+                    np.asarray(thetas[k], dtype=float)
+                    if thetas is not None
+                    else np.array([a.fraction for a in self.structure[k]])
+                )
+                theta = theta / theta.sum()
+                B.put(w, f"Theta{k}", theta)
+            tn = self.node_times(self.breaks(theta, k))
             Xk = np.asarray(states[k](tn), dtype=float)
             Uk = np.asarray(inputs[k](tn[1:]), dtype=float).reshape(len(self.model.inputs), -1)
             B.put(w, f"X{k}", Xk[:, 1:] if k == 0 else Xk)
@@ -468,12 +593,16 @@ class Collocation:
     def from_solution(self, other: Collocation, w: np.ndarray, p: np.ndarray) -> np.ndarray:
         """A warm start on this mesh from a solution ``w`` of ``other`` (its polynomials)."""
         sol = other.unpack(w, p)
+        br = sol["breaks"]
         states = [
-            (lambda t, k=k: other.evaluate(sol["X"][k], sol["U"][k], t)[0])
+            (lambda t, k=k: other.evaluate(sol["X"][k], sol["U"][k], t, br[k])[0])
             for k in range(len(self.chain))
         ]
         inputs = [
-            (lambda t, k=k: other.evaluate(sol["X"][k], sol["U"][k], t)[1])
+            (lambda t, k=k: other.evaluate(sol["X"][k], sol["U"][k], t, br[k])[1])
             for k in range(len(self.chain))
         ]
-        return self.pack(sol["s"], sol["free"], states, inputs, sol["T"], sol["p"])
+        thetas = None
+        if self.structure is not None and other.structure is not None:
+            thetas = [other.theta_of(w, k) for k in range(len(self.chain))]
+        return self.pack(sol["s"], sol["free"], states, inputs, sol["T"], sol["p"], thetas)

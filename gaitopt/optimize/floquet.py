@@ -27,8 +27,9 @@ __all__ = ["return_map_jacobian"]
 
 @lru_cache(maxsize=32)
 def _phase_residual(flow: ca.Function, N: int, d: int, C_key: bytes) -> ca.Function:
-    """``R(Xfree, x0, dt0, U, Udot, T, p)``: collocation defects with shifted node inputs, and
-    its Jacobians with respect to ``Xfree`` and ``[x0; dt0]``."""
+    """``R(Xfree, x0, dt0, U, Udot, H, p)`` (``H``: the interval lengths, s): collocation
+    defects with shifted node inputs, and its Jacobians with respect to ``Xfree`` and
+    ``[x0; dt0]``."""
     C = np.frombuffer(C_key).reshape(d + 1, d)
     n, n_u, n_p = flow.size1_in(0), flow.size1_in(1), flow.size1_in(2)
     Xf = ca.SX.sym("X", n, N * d)
@@ -36,20 +37,19 @@ def _phase_residual(flow: ca.Function, N: int, d: int, C_key: bytes) -> ca.Funct
     dt0 = ca.SX.sym("dt0")
     U = ca.SX.sym("U", n_u, N * d)
     Ud = ca.SX.sym("Ud", n_u, N * d)
-    T = ca.SX.sym("T")
+    H = ca.SX.sym("H", N)
     p = ca.SX.sym("p", n_p)
     X = ca.horzcat(x0, Xf)
     F = flow.map(N * d)(Xf, U + Ud * dt0, p)
-    h = T / N
     defects = [
-        ca.mtimes(X[:, j * d : j * d + d + 1], ca.DM(C)) - h * F[:, j * d : (j + 1) * d]
+        ca.mtimes(X[:, j * d : j * d + d + 1], ca.DM(C)) - H[j] * F[:, j * d : (j + 1) * d]
         for j in range(N)
     ]
     R = ca.vec(ca.horzcat(*defects))
     z = ca.vertcat(x0, dt0)
     return ca.Function(
         "phase_sensitivity",
-        [Xf, x0, dt0, U, Ud, T, p],
+        [Xf, x0, dt0, U, Ud, H, p],
         [ca.jacobian(R, ca.vec(Xf)), ca.jacobian(R, z)],
     )
 
@@ -90,10 +90,10 @@ def return_map_jacobian(col: Collocation, w: np.ndarray, p_model: np.ndarray) ->
         phase = model.phases[i]
         tr = phase.transitions[0]
         X, U, T = sol["X"][k], sol["U"][k], float(sol["T"][k])
-        h = T / N
-        Ud = np.hstack([U[:, j * d : (j + 1) * d] @ D.T / h for j in range(N)])
+        hs = T * np.diff(sol["breaks"][k])
+        Ud = np.hstack([U[:, j * d : (j + 1) * d] @ D.T / hs[j] for j in range(N)])
         sens = _phase_residual(phase.flow, N, d, col.C.tobytes())
-        R_X, R_z = (np.asarray(v, dtype=float) for v in sens(X[:, 1:], X[:, 0], 0.0, U, Ud, T, p))
+        R_X, R_z = (np.asarray(v, dtype=float) for v in sens(X[:, 1:], X[:, 0], 0.0, U, Ud, hs, p))
         dX = -np.linalg.solve(R_X, R_z)  # ∂vec(Xfree)/∂[x0; dt0]
         n = phase.n
         Phi = dX[-n:, :]  # the end state: last column of Xfree

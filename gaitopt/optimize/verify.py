@@ -34,7 +34,7 @@ def check_dense(col: Collocation, sol: dict[str, Any]) -> str | None:
     tn = np.linspace(0.0, 1.0, col.N * _SAMPLES + 1)
     for k, i in enumerate(col.chain):
         phase = model.phases[i]
-        X, U = col.evaluate(sol["X"][k], sol["U"][k], tn)
+        X, U = col.evaluate(sol["X"][k], sol["U"][k], tn, sol["breaks"][k])
         K = tn.size
         for j, tr in enumerate(phase.transitions):
             g = tr.direction * np.asarray(tr.guard.map(K)(X, U, p), dtype=float).ravel()
@@ -72,10 +72,14 @@ def profiles(col: Collocation, sol: dict[str, Any]) -> list[Any]:
         t0 = 0.0
         for k in range(step * n_cycle, (step + 1) * n_cycle):
             T = float(sol["T"][k])
-            h = T / col.N
+            edges = t0 + T * np.asarray(sol["breaks"][k])
             for j in range(col.N):
-                starts.append(t0 + j * h)
-                lengths.append(h)
+                if col.structure is None:  # uniform: t0 + j h exactly
+                    starts.append(t0 + j * (T / col.N))
+                    lengths.append(T / col.N)
+                else:
+                    starts.append(edges[j])
+                    lengths.append(edges[j + 1] - edges[j])
                 values.append(sol["U"][k][:, j * col.d : (j + 1) * col.d])
             t0 += T
         out.append(
@@ -122,7 +126,8 @@ def _integrand(problem: GaitProblem, phase: int) -> Callable[[np.ndarray, np.nda
 
 def simulated_cost(problem: GaitProblem, model: Any, sim: Simulation, profs: list[Any]) -> float:
     """The cost of a simulated orbit by composite Gauss–Legendre quadrature (64 panels of 8
-    points per phase; the positive part of the power is evaluated pointwise)."""
+    points per phase, split at the profile's breakpoints, where the input may jump; the
+    positive part of the power is evaluated pointwise)."""
     nodes, weights = np.polynomial.legendre.leggauss(8)
     p = model.p
     total = 0.0
@@ -132,7 +137,10 @@ def simulated_cost(problem: GaitProblem, model: Any, sim: Simulation, profs: lis
         f = _integrand(problem, arc.phase)
         step = max(int(np.searchsorted(section_times, arc.t0, side="right")) - 1, 0)
         t_sec = section_times[step]
-        edges = np.linspace(arc.t0, arc.t1, 65)
+        prof = profs[step % len(profs)]
+        inner = t_sec + prof.breaks
+        inner = inner[(inner > arc.t0 + 1e-12) & (inner < arc.t1 - 1e-12)]
+        edges = np.unique(np.concatenate([np.linspace(arc.t0, arc.t1, 65), inner]))
         for a, b in zip(edges[:-1], edges[1:], strict=True):
             ts = (a + b) / 2 + (b - a) / 2 * nodes
             xs = arc.solution(ts)
