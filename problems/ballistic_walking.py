@@ -73,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     folder = Path(args.out) / "ballistic_walking"
     folder.mkdir(parents=True, exist_ok=True)
-    steps = (0.6, 0.7) if args.fast else (0.5, 0.6, 0.7, 0.8)
+    steps = (0.6, 0.7) if args.fast else (0.6, 0.7, 0.8, 0.9)
     times = np.arange(0.2, 0.96, 0.05 if args.fast else 0.025)
 
     base = gaitopt.model("ballistic_walker")

@@ -147,6 +147,18 @@ class BallisticWalker(HybridModel):
                 f"ballistic_walker: `step_length` = {self.step_length:g} m must be below twice the "
                 f"leg length, {2 * leg:g} m; use a shorter step"
             )
+        # With the knee flexed by κ₀ the hip-to-toe distance is R; the toe reaches the ground
+        # behind only if the hip height l cos α is at most R.
+        lt, ls, k0 = self.thigh_length, self.shank_length, self.toe_off_knee
+        reach = math.sqrt(lt**2 + ls**2 + 2 * lt * ls * math.cos(k0))
+        height = leg * math.sqrt(1 - (self.step_length / (2 * leg)) ** 2)
+        if height > reach:
+            raise ParameterError(
+                f"ballistic_walker: with `toe_off_knee` = {k0:g} rad the toe reaches only "
+                f"{reach:.4g} m from the hip, below the hip height {height:.4g} m at "
+                f"`step_length` = {self.step_length:g} m: the toe cannot be on the ground at "
+                f"toe-off; use a longer step or a smaller `toe_off_knee`"
+            )
 
     # -- geometry ----------------------------------------------------------------------------
     @property
