@@ -65,7 +65,7 @@ from typing import Any
 import numpy as np
 
 from . import _bench_baselines as baselines
-from . import _bench_branches, _bench_curves
+from . import _bench_branches, _bench_curves, _bench_optimize
 from .files import write_json
 
 __all__ = ["main", "run"]
@@ -479,6 +479,11 @@ def run(
             record["curves"] = _bench_curves.run(quick=quick)
         except Exception as err:  # report, never sink the benchmark
             record["curves"] = {"skipped": f"{type(err).__name__}: {err}"}
+        log("[bench] optimal gaits: compass gait vs a Hermite–Simpson baseline, five-link biped")
+        try:
+            record["optimize"] = _bench_optimize.run(quick=quick)
+        except Exception as err:  # report, never sink the benchmark
+            record["optimize"] = {"skipped": f"{type(err).__name__}: {err}"}
     record["elapsed_s"] = time.perf_counter() - started
     return record
 
@@ -907,6 +912,9 @@ def format_table(record: dict[str, Any]) -> str:
     if "curves" in record:
         c = record["curves"]
         lines += ["", _bench_curves.table(c) if "skipped" not in c else f"curves: {c}"]
+    if "optimize" in record:
+        o = record["optimize"]
+        lines += ["", _bench_optimize.table(o) if "skipped" not in o else f"optimize: {o}"]
     lines.append(f"Total benchmark time: {record['elapsed_s']:.0f} s.")
     return "\n".join(lines)
 
