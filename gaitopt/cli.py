@@ -133,6 +133,19 @@ def _count(minimum: int, maximum: int | None = None, why: str = "") -> Callable[
     return parse
 
 
+def _scheduler_address(text: str) -> str:
+    """An argparse ``type`` for ``--scheduler``: ``local`` or a Dask address with its port
+    (``tcp://10.0.0.5:8786``, ``10.0.0.5:8786``)."""
+    host, sep, port = text.strip().rpartition(":")
+    bare = host.split("://", 1)[-1]
+    if text.strip() == "local" or (sep and port.isdigit() and bare and "\x00" not in text):
+        return text.strip()
+    raise argparse.ArgumentTypeError(
+        f"expected 'local' or a Dask scheduler address with its port, e.g. tcp://10.0.0.5:8786, "
+        f"got {text!r}"
+    )
+
+
 #: Why ``--steps`` (solve, continue) and ``--max-period`` stop at :data:`MAX_ORBIT_STEPS`.
 _ORBIT_LIMIT = "the shooting system of a period-k orbit grows faster than k"
 #: Why ``simulate --steps`` stops at :data:`MAX_SIMULATION_STEPS`.
@@ -421,6 +434,24 @@ def _solve_arguments(parser: argparse.ArgumentParser) -> None:
         default="newton",
         help="Newton rootfinder on the shooting equations (default) or IPOPT",
     )
+    parser.add_argument(
+        "--starts",
+        type=_count(1),
+        default=1,
+        metavar="N",
+        help="also run a seeded multi-start search from N starts around the default start and "
+        "list every distinct gait found, with its stability (default 1: none)",
+    )
+    parser.add_argument(
+        "--seed", type=_count(0), default=0, help="seed of the multi-start sample (default 0)"
+    )
+    parser.add_argument(
+        "--scheduler",
+        type=_scheduler_address,
+        default=None,
+        metavar="ADDRESS",
+        help="run the multi-start on Dask: 'local' or a scheduler address (default: serial)",
+    )
 
 
 def _print_cycle(cycle: LimitCycle) -> None:
@@ -443,6 +474,18 @@ def _print_cycle(cycle: LimitCycle) -> None:
     for z in cycle.multipliers:
         print(f"    {z.real: .8f} {z.imag:+.8f}j    |λ| = {abs(z):.8f}")
     _print_rows([("stable", cycle.stable), ("verified", cycle.verified)])
+    if cycle.route:
+        _print_rows([("route", cycle.route)])
+    if cycle.gaits:
+        print(f"distinct gaits of the multi-start ({len(cycle.gaits)})")
+        for k, gait in enumerate(cycle.gaits, start=1):
+            mods = ", ".join(f"{abs(complex(*z)):.6f}" for z in gait["multipliers"])
+            where = ", ".join(f"{n}={v:.8g}" for n, v in gait["fixed_point"].items())
+            kind = "stable" if gait["stable"] else "unstable"
+            print(
+                f"    {k}. period {gait['period']:.10g}  |λ| = [{mods}]  {kind}  "
+                f"({gait['starts']} start(s))  {where}"
+            )
 
 
 def run_solve(args: argparse.Namespace) -> int:
@@ -451,9 +494,21 @@ def run_solve(args: argparse.Namespace) -> int:
     guess = parse_guess(model, args.guess)
     try:
         with _solver_output_to_stderr():
-            cycle = find_limit_cycle(model, guess, steps=args.steps, method=args.method)
+            cycle = find_limit_cycle(
+                model,
+                guess,
+                steps=args.steps,
+                method=args.method,
+                starts=args.starts,
+                seed=args.seed,
+                scheduler=args.scheduler,
+            )
     except GuessError as exc:
         raise InputError(f"{_echo('--guess', args.guess or ()) or '--guess'}: {exc}") from None
+    except OSError as exc:  # a Dask scheduler that cannot be reached
+        if args.scheduler in (None, "local"):
+            raise
+        raise InputError(f"--scheduler {args.scheduler}: cannot reach it ({exc})") from None
     if args.json:
         _print_json(cycle.as_dict())
     else:

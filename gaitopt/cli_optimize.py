@@ -23,6 +23,7 @@ registers this one in its ``SUBCOMMANDS``).
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -84,7 +85,7 @@ def _parse(args: argparse.Namespace, model: Any) -> dict[str, Any]:
             raise InputError(f"--fix {item}: must be positive, e.g. --fix {name}=0.8")
     examples = {n: f"{n}=10" for n in model.inputs} or {"INPUT": "INPUT=10"}
     bounds = {
-        n: max(abs(lo), abs(hi)) for n, (lo, hi) in dict(getattr(model, "input_bounds", {})).items()
+        n: max(abs(lo), abs(hi)) for n, (lo, hi) in model.input_bounds.items()
     }
     for name, (item, value) in _assignments("--bound", args.bound, examples).items():
         if name not in model.inputs:
@@ -105,7 +106,7 @@ def _parse(args: argparse.Namespace, model: Any) -> dict[str, Any]:
     return {
         **{name: value for name, (_, value) in fixed.items()},
         "bounds": bounds,
-        "state_bounds": dict(getattr(model, "state_bounds", {})),
+        "state_bounds": dict(model.state_bounds),
         "free": free,
     }
 
@@ -113,12 +114,14 @@ def _parse(args: argparse.Namespace, model: Any) -> dict[str, Any]:
 def run(args: argparse.Namespace) -> int:
     """``gaitopt optimize``: the optimal gait, verified by simulation, with its multipliers."""
     from .cli import (
+        EXIT_BAD_INPUT,
         EXIT_NOT_FOUND,
         EXIT_OK,
         InputError,
         _print_json,
         _solver_output_to_stderr,
         build_model,
+        write_outputs,
     )
     from .optimize import optimize_gait
 
@@ -137,12 +140,14 @@ def run(args: argparse.Namespace) -> int:
     except GaitoptInputError as exc:
         raise InputError(str(exc)) from None
     report = gait.to_json(minima=args.starts > 1)
-    if args.out:
-        _write(gait, report, Path(args.out))
+    lost = write_outputs(args.out, lambda folder: _write(gait, report, folder))
     if args.json:
         _print_json(report)
     else:
         _print(report)
+    if lost is not None:  # --out failed after the run: the files went elsewhere, said on stderr
+        print(lost, file=sys.stderr)
+        return EXIT_BAD_INPUT
     return EXIT_OK if gait.success else EXIT_NOT_FOUND
 
 

@@ -185,6 +185,8 @@ def check_output_folder(folder: str | os.PathLike) -> Path:
     text = os.fspath(folder)
     if not str(text).strip():
         raise GaitoptInputError("the output folder is empty; give a directory, e.g. results/run")
+    if "\0" in str(text):
+        raise GaitoptInputError("a path cannot contain a null byte; give a directory name")
     path = Path(text)
     try:
         if path.exists() and not path.is_dir():

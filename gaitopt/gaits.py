@@ -110,7 +110,7 @@ def run_model(name: str, out: Path) -> tuple[LimitCycle, list[str], list[str]]:
 
     def staircase(path: Path) -> None:
         lo, hi = return_map_interval(cycle)
-        closed_form = getattr(model, "closed_form_map", None)
+        closed_form = model.closed_form_map if model.closed_form_map(lo) is not None else None
         # Where the model states its map's domain the staircase starts from its default start
         # (inside the domain); otherwise near the top of (0, 2 s*).
         start = None if model.map_domain() is not None else lo + 0.9 * (hi - lo)

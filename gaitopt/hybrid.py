@@ -299,6 +299,13 @@ class HybridModel:
     #: whose gaits come from optimisation: ``make gaits`` and the tests' passive-gait fixtures
     #: skip the passive search for it, saying why (:meth:`existence_note`).
     passive_gait: ClassVar[bool] = True
+    #: Range of each per-step input, by name: ``{input: (low, high)}`` in the input's unit
+    #: (controllers clip to it; the optimiser bounds by it).  Empty: unbounded.
+    input_bounds: ClassVar[Mapping[str, tuple[float, float]]] = {}
+    #: Range of each state, by name, that an optimised gait must keep to (joint limits).
+    state_bounds: ClassVar[Mapping[str, tuple[float, float]]] = {}
+    #: Longest a phase may last in simulation (s) before it counts as never ending.
+    max_phase_time: ClassVar[float] = 30.0
     _cache: ClassVar[dict[type, _Structure]] = {}
 
     def __post_init__(self) -> None:
@@ -324,8 +331,31 @@ class HybridModel:
 
     def map_domain(self) -> tuple[float, float] | None:
         """Interval of a 1-D section coordinate where the return map can be defined, if the model
-        knows it (for plots of the map); None otherwise."""
+        knows it (for plots of the map and the feasible range of a deadbeat controller); None
+        otherwise."""
         return None
+
+    def closed_form_map(self, coordinate: float) -> float | None:
+        """The return map of a 1-D section in closed form, where theory gives it (the rimless
+        wheel, the line juggler, the vertical hopper), for checks and plots; None otherwise."""
+        del coordinate
+        return None
+
+    def section_limits(self) -> dict[str, tuple[float, float, str]]:
+        """Closed-form limits of the section coordinates at these parameters, by name:
+        ``(low, high, why)``.  A point outside them does not exist (the SLIP's apex above its
+        energy height) and is bad input, not a gait or a decision that fails.  Empty (default):
+        no such limits."""
+        return {}
+
+    def input_box(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """:attr:`input_bounds` as ``(low, high)`` vectors in input order (``±inf`` where an
+        input is not bounded); None for a model that bounds none."""
+        if not self.input_bounds:
+            return None
+        lo = np.array([self.input_bounds.get(k, (-np.inf, np.inf))[0] for k in self.inputs])
+        hi = np.array([self.input_bounds.get(k, (-np.inf, np.inf))[1] for k in self.inputs])
+        return lo, hi
 
     def outline(self, phase: Phase, x: np.ndarray, points: np.ndarray) -> np.ndarray | None:
         """A drawing of the model in ``phase`` at state ``x`` (2×M, m, NaN-separated polylines,

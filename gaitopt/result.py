@@ -90,6 +90,12 @@ class LimitCycle:
         Newton (or IPOPT) iterations (of the final mesh).
     solve_time : float
         Wall-clock seconds spent in :func:`find_limit_cycle`.
+    route : str
+        How the gait was reached when no guess was given: followed from the default gait at the
+        default parameters (a homotopy), or solved directly from the default start.
+    gaits : list of dict
+        With ``starts > 1``: every distinct gait the multi-start search found (``fixed_point``,
+        ``period``, ``multipliers``, ``stable``, ``starts``: how many starts reached it).
     """
 
     success: bool
@@ -114,6 +120,8 @@ class LimitCycle:
     discretisation_error: float = float("nan")
     iterations: int = 0
     solve_time: float = float("nan")
+    route: str = ""
+    gaits: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def x(self) -> np.ndarray:
@@ -161,6 +169,8 @@ class LimitCycle:
             "verification_error": _num(self.verification_error),
             "discretisation_error": _num(self.discretisation_error),
             "iterations": int(self.iterations),
+            "route": self.route,
+            **({"gaits": self.gaits} if self.gaits else {}),
         }
         if timing:
             out["solve_time"] = _num(self.solve_time)

@@ -48,7 +48,7 @@ GUESSES = {
     "long": {"theta": 0.2003, "theta_dot": -0.1998},
     "short": {"theta": 0.1939, "theta_dot": -0.2039},
 }
-# Garcia et al. 1998 (and DESIGN.md): the gaits at γ = 0.009 to 14 digits.
+# Garcia et al. 1998 (and docs/design.md): the gaits at γ = 0.009 to 14 digits.
 GARCIA = {
     "long": {"theta": 0.20031090049483, "theta_dot": -0.19983247291764},
     "short": {"theta": 0.19393736960624, "theta_dot": -0.20386692731962},

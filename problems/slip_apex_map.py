@@ -6,7 +6,7 @@ Sources: Tedrake, *Underactuated Robotics*, ch. "Simple models of walking and ru
 fixed point near 0.87 m and an unstable one near 0.92 m; the map is undefined below the touchdown
 height ``l0 cos θ_td`` and the runner falls back when too little of the energy is forward speed.
 
-What it does, at the defaults of ``gaitopt.model("slip")`` (DESIGN.md's table):
+What it does, at the defaults of ``gaitopt.model("slip")`` (docs/design.md's table):
 
 1. samples the apex map by event-located SciPy simulation over the whole apex domain
    ``(l0 cos θ_td, E/(m g))`` and records where (and why) it is undefined;

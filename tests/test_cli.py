@@ -1,4 +1,4 @@
-"""The ``gaitopt`` command line (DESIGN.md, "Public contract").
+"""The ``gaitopt`` command line (docs/design.md, "Public contract").
 
 Most cases call :func:`gaitopt.cli.main` in-process (fast); one runs the installed console script.
 """
@@ -18,7 +18,7 @@ import pytest
 from gaitopt.cli import SUBCOMMANDS, main
 from gaitopt.models import REGISTRY
 
-# Keys of `solve --json` promised by DESIGN.md (public contract); the library may add more.
+# Keys of `solve --json` promised by docs/design.md (public contract); the library may add more.
 SOLVE_KEYS = {
     "model", "params", "success", "message", "period", "steps", "state_names", "fixed_point",
     "multipliers", "stable", "residual", "verified",
@@ -56,7 +56,7 @@ def test_list_json_describes_every_model(capsys):
         assert set(entry["section_coordinates"]) <= set(entry["state_names"])
         assert entry["inputs"] == list(cls.inputs)
     compass = next(m for m in models if m["name"] == "compass_gait")
-    # State order and section from DESIGN.md's model table.
+    # State order and section from docs/design.md's model table.
     assert compass["state_names"] == ["stance", "swing", "stance_dot", "swing_dot"]
     assert compass["inputs"] == ["hip_torque"]
 
@@ -80,9 +80,9 @@ def test_solve_compass_gait_json_matches_drake(capsys):
     assert result["model"] == "compass_gait"
     assert result["success"] is True and result["verified"] is True and result["stable"] is True
     assert result["steps"] == 1
-    assert result["params"]["slope"] == 0.0525  # DESIGN.md default
+    assert result["params"]["slope"] == 0.0525  # docs/design.md default
     assert result["state_names"] == ["stance", "swing", "stance_dot", "swing_dot"]
-    # Source: DESIGN.md "Reference numbers" — Drake's CompassGait simulated to convergence at the
+    # Source: docs/design.md "Reference numbers" — Drake's CompassGait simulated to convergence at the
     # defaults: step period 0.7344606 s, post-impact state [−0.2187746, 0.3237746, 1.0928668,
     # 0.3761346]. Tolerance 1e-6 (the reference is given to 7 decimals).
     assert math.isclose(result["period"], 0.7344606, abs_tol=1e-6)
@@ -91,7 +91,7 @@ def test_solve_compass_gait_json_matches_drake(capsys):
         assert math.isclose(result["fixed_point"][name], value, abs_tol=1e-6), name
     multipliers = result["multipliers"]
     assert multipliers and all(len(z) == 2 for z in multipliers)  # [re, im] pairs
-    # `stable` means every multiplier has modulus < 1 (DESIGN.md, "Stability").
+    # `stable` means every multiplier has modulus < 1 (docs/design.md, "Stability").
     assert max(math.hypot(re, im) for re, im in multipliers) < 1
     # The residual is the max-norm of the shooting equations; the library's default tol is 1e-10.
     assert result["residual"] <= 1e-10
@@ -106,7 +106,7 @@ def test_solve_text_summary(capsys):
 
 
 def test_solve_simplest_walker_unstable_short_step_gait(capsys):
-    # Source: Garcia, Chatterjee, Ruina & Coleman 1998 (via DESIGN.md), slope 0.009: the unstable
+    # Source: Garcia, Chatterjee, Ruina & Coleman 1998 (via docs/design.md), slope 0.009: the unstable
     # short-step gait θ* = 0.19393736960624, θ̇* = −0.20386692731962. Tolerance 1e-8: Newton
     # converges to residual < 1e-10 and the published values have 14 digits.
     status, result = run_json(
@@ -117,12 +117,12 @@ def test_solve_simplest_walker_unstable_short_step_gait(capsys):
     assert result["success"] is True and result["stable"] is False
     assert math.isclose(result["fixed_point"]["theta"], 0.19393736960624, abs_tol=1e-8)
     assert math.isclose(result["fixed_point"]["theta_dot"], -0.20386692731962, abs_tol=1e-8)
-    # Unstable: some multiplier lies outside the unit circle (DESIGN.md, "Stability").
+    # Unstable: some multiplier lies outside the unit circle (docs/design.md, "Stability").
     assert max(math.hypot(re, im) for re, im in result["multipliers"]) > 1
 
 
 def test_solve_without_a_gait_exits_1_with_json(capsys):
-    # Source: DESIGN.md "Reference numbers" — the rimless wheel rolls only where ω* > ω₁; at
+    # Source: docs/design.md "Reference numbers" — the rimless wheel rolls only where ω* > ω₁; at
     # slope 0.03 (8 spokes) it has no rolling gait, so no gait may be reported.
     status, result = run_json(capsys, "solve", "rimless_wheel", "--set", "slope=0.03", "--json")
     assert status == 1
@@ -137,7 +137,7 @@ def test_solve_ipopt_json_stdout_is_only_json(capfd):
     out, _ = capfd.readouterr()
     assert status == 0
     result = json.loads(out)
-    # Source: DESIGN.md (Drake's CompassGait), as above; tolerance 1e-6.
+    # Source: docs/design.md (Drake's CompassGait), as above; tolerance 1e-6.
     assert math.isclose(result["period"], 0.7344606, abs_tol=1e-6)
 
 
@@ -160,7 +160,7 @@ def test_simulate_compass_gait_json(capsys):
     assert [e["transition"] for e in events] == ["heel strike"] * 3
     # Each return to the section is a heel strike; same floats, so exact equality.
     assert [e["t"] for e in events] == [r["t"] for r in returns[1:]]
-    # On the section swing = 2·slope − stance (DESIGN.md, compass-gait guard); tolerance 1e-12,
+    # On the section swing = 2·slope − stance (docs/design.md, compass-gait guard); tolerance 1e-12,
     # the reset is exact up to rounding.
     for entry in returns:
         state = entry["state"]
@@ -247,7 +247,7 @@ def test_console_script_bad_input(tmp_path):
 # -- running and control (issue 3) --------------------------------------------------------------
 @pytest.mark.parametrize(("z", "stable"), [(0.87, True), (0.92, False)])
 def test_solve_slip_textbook_fixed_points(capsys, z, stable):
-    # Source: DESIGN.md "Reference numbers" (Tedrake's SLIP apex map): a stable fixed point near
+    # Source: docs/design.md "Reference numbers" (Tedrake's SLIP apex map): a stable fixed point near
     # z = 0.87 m and an unstable one near 0.92 m; "near": within 1 cm.
     status, result = run_json(capsys, "solve", "slip", "--guess", f"z={z}", "--json")
     assert status == 0 and result["success"] is True
@@ -313,7 +313,7 @@ def test_bad_control_input_is_one_line_and_exit_2(capsys, argv, expected):
 
 # -- continue ------------------------------------------------------------------------------------
 def test_continue_json_contract_and_period_doubling(capsys, tmp_path):
-    # DESIGN.md's contract: `continue --json` prints model, param, points (param, period,
+    # docs/design.md's contract: `continue --json` prints model, param, points (param, period,
     # fixed_point, multipliers, stable) and special_points (kind, param).  The compass gait's
     # first period doubling lies at slope 0.0766356 (located by continuation to 1e-10 and checked
     # against a bisection on the multiplier in tests/test_continuation.py): tolerance 1e-7.

@@ -53,8 +53,8 @@ def test_lqr_and_acker_call_python_control(slip, monkeypatch):
         calls.append("acker")
         return np.array([[0.456]])
 
-    monkeypatch.setattr(gc.ct, "dlqr", fake_dlqr)
-    monkeypatch.setattr(gc.ct, "acker", fake_acker)
+    monkeypatch.setattr(ct, "dlqr", fake_dlqr)
+    monkeypatch.setattr(ct, "acker", fake_acker)
     assert gc.lqr(lin).gain.tolist() == [[0.123]]
     assert gc.acker(lin, [0.1]).gain.tolist() == [[0.456]]
     assert calls == ["dlqr", "acker"]

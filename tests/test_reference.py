@@ -1,4 +1,4 @@
-"""The reference numbers of DESIGN.md, each with its source and tolerance."""
+"""The reference numbers of docs/design.md, each with its source and tolerance."""
 
 from __future__ import annotations
 
@@ -142,7 +142,7 @@ def test_rimless_wheel_rolls_just_above_existence():
 
 
 def test_compass_gait_matches_drake(cycles):
-    # Source: DESIGN.md — step period 0.7344606 s, post-impact state
+    # Source: docs/design.md — step period 0.7344606 s, post-impact state
     # [−0.2187746, 0.3237746, 1.0928668, 0.3761346], which agrees with Drake's CompassGait
     # simulated to convergence.  Given to 7 decimals: tolerance 5e-8.
     cycle = cycles["compass_gait"]

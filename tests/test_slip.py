@@ -33,7 +33,7 @@ def test_defaults_are_the_textbook_dimensionless_numbers(slip):
 
 
 def test_textbook_fixed_points_and_their_stability(gaits):
-    # Source: DESIGN.md "Reference numbers" / Tedrake's apex-map figure: a stable fixed point
+    # Source: docs/design.md "Reference numbers" / Tedrake's apex-map figure: a stable fixed point
     # near z = 0.87 m and an unstable one near 0.92 m.  "Near": within 1 cm (the figure's
     # resolution); the multiplier excludes the trivial one of energy conservation (one only).
     stable, unstable = gaits[0.87], gaits[0.92]
@@ -89,7 +89,7 @@ def test_the_map_limits_are_named_falls_not_crashes(slip):
 
 
 def test_energy_is_conserved_through_every_phase_and_reset(slip, gaits):
-    # Invariant: the SLIP is conservative (DESIGN.md "Invariants").  Along each simulated arc and
+    # Invariant: the SLIP is conservative (docs/design.md "Invariants").  Along each simulated arc and
     # across touchdown, liftoff and apex the energy stays at the parameter E; tolerance 1e-8
     # relative (rtol 1e-11 over a few steps).
     x0 = gaits[0.92].x + np.array([0.0, 0.01, 0.0, 0.0])

@@ -155,7 +155,7 @@ def goswami(tmp_path_factory):
 
 
 def test_stability_map_is_stable_at_the_defaults(goswami):
-    # Source: DESIGN.md (Drake's CompassGait run to convergence): at the defaults the gait is
+    # Source: docs/design.md (Drake's CompassGait run to convergence): at the defaults the gait is
     # [−0.2187746, 0.3237746, 1.0928668, 0.3761346], and it is stable (Goswami et al. 1996:
     # the passive gait at μ = 2 on a shallow slope is stable).  Tolerance 5e-7 (the reference's
     # 7 digits).  The grid point nearest the defaults is stable too.

@@ -19,7 +19,7 @@ from .vanderpol import VanDerPol
 from .vertical_hopper import VerticalHopper
 
 __all__ = [
-    "REGISTRY", "model", "as_model", "BouncingBall", "CompassGait", "KneedWalker", "LineJuggler",
+    "REGISTRY", "model", "as_model", "register", "unregister", "BouncingBall", "CompassGait", "KneedWalker", "LineJuggler",
     "FiveLinkBiped",
     "PlanarJuggler",
     "BallisticWalker",
@@ -48,6 +48,50 @@ REGISTRY: dict[str, type[HybridModel]] = {
 }
 
 
+def register(cls: type[HybridModel]) -> type[HybridModel]:
+    """Register a model class under its ``name``, for :func:`model` and the CLI.
+
+    Usable as a decorator.  A package can also register its models without being imported
+    first, through the entry-point group ``gaitopt.models`` (``name = "package.module:Class"``),
+    which :func:`model` consults for a name it does not know.
+
+    Raises
+    ------
+    GaitoptInputError
+        If ``cls`` is not a :class:`~gaitopt.hybrid.HybridModel` subclass with a ``name``, or the
+        name is taken (unregister the old one first: one meaning per name).
+    """
+    from ..errors import GaitoptInputError
+
+    if not (isinstance(cls, type) and issubclass(cls, HybridModel) and cls.name):
+        raise GaitoptInputError(
+            f"register: expected a HybridModel subclass with a `name`, got {cls!r}; see "
+            f"docs/writing-a-model.md"
+        )
+    if cls.name in REGISTRY:
+        raise GaitoptInputError(
+            f"register: a model named {cls.name!r} is already registered "
+            f"({REGISTRY[cls.name].__module__}); call gaitopt.unregister({cls.name!r}) first"
+        )
+    REGISTRY[cls.name] = cls
+    return cls
+
+
+def unregister(name: str) -> None:
+    """Remove a registered model (a no-op for an unknown name)."""
+    REGISTRY.pop(name, None)
+
+
+def _from_entry_points(name: str) -> None:
+    """Register the model ``name`` if an installed package declares it as an entry point."""
+    from importlib.metadata import entry_points
+
+    for entry in entry_points(group="gaitopt.models"):
+        if entry.name == name:
+            register(entry.load())
+            return
+
+
 def model(name: str, **params: float) -> HybridModel:
     """Build a model by name with some parameters changed from their defaults.
 
@@ -63,6 +107,8 @@ def model(name: str, **params: float) -> HybridModel:
             f"`name` must be a model name (a str), got {name!r} of type {type(name).__name__}; "
             f"available: {', '.join(REGISTRY)}"
         )
+    if name not in REGISTRY:
+        _from_entry_points(name)
     if name not in REGISTRY:
         raise UnknownModelError(
             f"unknown model {name!r}; {did_you_mean(name, REGISTRY)}available: "

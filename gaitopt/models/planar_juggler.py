@@ -232,12 +232,26 @@ class PlanarJuggler(HybridModel):
             target=None,
             doc="x = 0: the ball left the paddle's right arm (the mirror law needs x > 0)",
         )
+        # The ball stays above the paddle between impacts: its distance d = n·(x, y) from the
+        # paddle line is zero at the impact that starts a flight (it must rise at once) and at the
+        # one that ends it.
+        above = sym.constraint(
+            "ball above the paddle",
+            xs,
+            -x * ca.sin(theta) + y * ca.cos(theta),
+            "ball below the paddle",
+            at_start=True,
+            at_end=True,
+            unit="m",
+            source="the paddle is solid (Buehler et al. 1994)",
+        )
         flight = Phase(
             "flight",
             STATES,
             flow,
             (hit, dropped, over),
             {"energy": sym.conserved("energy", xs, energy(y, vx, vy))},
+            constraints=(above,),
         )
 
         s = ca.SX.sym("s", 3)

@@ -293,9 +293,9 @@ class Slip(HybridModel):
     mesh = (4, 4)
     #: A flight from an apex lasts at most sqrt(2 E/(m g²)) ≈ 0.6 s at the defaults.
     max_phase_time: ClassVar[float] = 5.0
-    #: Range of the per-step input (``low``, ``high``): the foot ahead of the hip, the leg above
-    #: the ground (step-to-step controllers keep to it).
-    input_bounds: ClassVar[tuple[tuple[float, ...], tuple[float, ...]]] = ((0.0,), (math.pi / 2,))
+    #: Range of the per-step input: the foot ahead of the hip, the leg above the ground
+    #: (step-to-step controllers keep to it).
+    input_bounds: ClassVar[dict[str, tuple[float, float]]] = {"touchdown_angle": (0.0, math.pi / 2)}
 
     mass: float = parameter(
         _M, unit="kg", doc="body mass m", source=_TEDRAKE, low=0.0, high=1e4, low_open=True
@@ -392,6 +392,16 @@ class Slip(HybridModel):
         """The apex map's domain (see :meth:`apex_domain`)."""
         return self.apex_domain()
 
+    def section_limits(self) -> dict[str, tuple[float, float, str]]:
+        """An apex cannot be higher than the energy height ``E/(m g)``, where no forward speed
+        is left (``ẋ = sqrt(2 (E/m − g z))``)."""
+        top = self.highest_apex()
+        why = (
+            f"the energy height E/(m g) = {top:.6g} m (energy {self.energy:g} J), where no "
+            f"forward speed is left; raise `energy` for a higher apex"
+        )
+        return {"z": (-math.inf, top, why)}
+
     def apex_speed(self, z: float) -> float:
         """Forward speed ``ẋ = sqrt(2 (E/m − g z))`` (m/s) at an apex of height ``z``."""
         return math.sqrt(max(2 * (self.energy / self.mass - self.gravity * z), 0.0))
@@ -433,7 +443,7 @@ class SlipSwingLeg(Slip):
     title = "SLIP with a swing-leg law (blind running)"
     inputs = ("t_center", "t_halfwidth") + tuple(f"c{j}" for j in range(SWING_LAW_DEGREE + 1))
     input_units = ("s", "s") + ("rad",) * (SWING_LAW_DEGREE + 1)
-    input_bounds = None
+    input_bounds: ClassVar[dict[str, tuple[float, float]]] = {}
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
