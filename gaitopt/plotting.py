@@ -640,7 +640,7 @@ def plot_branch(
     bottom.set_yscale("log")
     bottom.legend(fontsize=7, loc="best")
     top.set_ylabel(state_label(model, name, "on the section"))
-    bottom.set_ylabel("largest Floquet multiplier modulus |λ| (dimensionless, log scale)")
+    bottom.set_ylabel("largest multiplier |λ| (1, log scale)")
     spec = next((sp for sp in model.parameter_specs() if sp.name == branch.param), None)
     unit = spec.unit if spec is not None else None
     bottom.set_xlabel(f"parameter {branch.param} {unit_label(unit)}")

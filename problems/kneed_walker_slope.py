@@ -86,9 +86,11 @@ def main(argv: list[str] | None = None) -> int:
     fig, (top, bottom) = plot_branch(branch, coordinate="q1")
     top.axvline(boundary["slope"], color="0.3", ls=":", lw=1)
     top.annotate(
-        "trailing foot stops\nlifting off",
-        (boundary["slope"], 0.5),
+        "trailing foot\nstops lifting off",
+        (boundary["slope"], 0.2),
         xycoords=("data", "axes fraction"),
+        xytext=(-6, 0),
+        textcoords="offset points",
         ha="right",
         fontsize=8,
     )
