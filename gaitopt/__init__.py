@@ -9,10 +9,9 @@ systems — multiple shooting with CasADi, Floquet multipliers, return maps, sim
 
 from __future__ import annotations
 
-from importlib import metadata as _metadata
-
+# The function `continuation` shares its name with its module: imported eagerly, since a lazy
+# name would be shadowed by the submodule once anything imports it.
 from .continuation import Branch, PseudoArclength, SpecialPoint, continuation
-from .curves import Curve, ParameterPath, bifurcation_curve
 from .errors import (
     FrozenModelError,
     GaitoptInputError,
@@ -21,16 +20,16 @@ from .errors import (
     StateError,
     UnknownModelError,
 )
-from .hybrid import HybridModel, Phase, Section, Transition
-from .models import REGISTRY, model
-from .optimize import OptimalGait, optimize_gait
-from .orbits import orbital_distance
+from .hybrid import Constraint, HybridModel, Phase, Section, Transition
+from .models import REGISTRY, model, register, unregister
 from .result import LimitCycle, OrbitArc
 from .shooting import MultipleShooting, find_limit_cycle
 from .simulation import Simulation, simulate
 
 __all__ = [
     "model",
+    "register",
+    "unregister",
     "REGISTRY",
     "find_limit_cycle",
     "continuation",
@@ -52,6 +51,7 @@ __all__ = [
     "Phase",
     "Section",
     "Transition",
+    "Constraint",
     "GaitoptInputError",
     "UnknownModelError",
     "ParameterError",
@@ -59,7 +59,37 @@ __all__ = [
     "GuessError",
     "FrozenModelError",
 ]
-try:  # the one source of the version: the installed package's metadata (pyproject.toml)
-    __version__ = _metadata.version("gaitopt")
-except _metadata.PackageNotFoundError:  # running from a source tree that is not installed
-    __version__ = "0+unknown"
+#: Names imported on first use (PEP 562): the two-parameter curves, the orbit
+#: distance and optimal gaits pull in SciPy's integrators and optimisers, which most calls of
+#: ``import gaitopt`` never need.
+_LAZY = {
+    "bifurcation_curve": ".curves",
+    "Curve": ".curves",
+    "ParameterPath": ".curves",
+    "optimize_gait": ".optimize",
+    "OptimalGait": ".optimize",
+    "orbital_distance": ".orbits",
+}
+
+
+def __getattr__(name: str):
+    if name == "__version__":  # the one source of the version: the installed package's metadata
+        from importlib import metadata
+
+        try:
+            value = metadata.version("gaitopt")
+        except metadata.PackageNotFoundError:  # a source tree that is not installed
+            value = "0+unknown"
+        globals()[name] = value
+        return value
+    if name in _LAZY:
+        from importlib import import_module
+
+        value = getattr(import_module(_LAZY[name], __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'gaitopt' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

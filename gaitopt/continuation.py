@@ -204,7 +204,7 @@ class Branch:
 
     # -- output ---------------------------------------------------------------------------------
     def as_dict(self) -> dict[str, Any]:
-        """The JSON object of ``gaitopt continue --json`` (DESIGN.md's contract), with the
+        """The JSON object of ``gaitopt continue --json`` (docs/design.md's contract), with the
         period-doubled branches under ``branches``."""
         return {
             "model": self.model.name,
@@ -439,6 +439,7 @@ class _Follower:
         disc = first.discretisation or MultipleShooting(*type(model).mesh)
         self.tr: Transcription = transcription(type(model), disc, first.steps)
         self.refinements = 0
+        self._last_evaluation = None
         self.cycles: list[LimitCycle] = [first]
         self.special_points: list[SpecialPoint] = []
         self.stop = ""
@@ -457,11 +458,19 @@ class _Follower:
 
     def jacobian(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``F(y)`` and ``[F_w, F_ℓ]`` (``F_ℓ`` through the parameter and the input it sets)."""
-        F, F_w, F_p, F_u = self.tr.residual_jacobians(y[:-1], self._u(y), self._p(y))
-        F = np.asarray(F, dtype=float).ravel()
-        F_lam = np.asarray(F_p)[:, self.index] + np.asarray(F_u) @ self.du
-        J = np.hstack([np.asarray(F_w), F_lam[:, None] * self.scale])
-        return F, J
+        ev = self._evaluate(y)
+        F_lam = ev.F_p[:, self.index] + ev.F_u @ self.du
+        J = np.hstack([ev.F_w, F_lam[:, None] * self.scale])
+        return ev.F, J
+
+    def _evaluate(self, y: np.ndarray):
+        """The shooting equations and all their Jacobians at ``y`` in one compiled call
+        (:meth:`gaitopt.shooting.ShootingProblem.evaluate`), kept for the next use at the same
+        point (the tangent, the error estimate, the multipliers and the certificate)."""
+        key = (id(self.tr), y.tobytes())
+        if self._last_evaluation is None or self._last_evaluation[0] != key:
+            self._last_evaluation = (key, self.tr.evaluate(y[:-1], self._u(y), self._p(y)))
+        return self._last_evaluation[1]
 
     def weights(self, y: np.ndarray) -> np.ndarray:
         n = y.size - 1
@@ -505,8 +514,10 @@ class _Follower:
 
     def multipliers_at(self, y: np.ndarray) -> np.ndarray:
         """Multipliers only (no checks): for locating special points."""
-        J_w, J_u, _, _ = self.tr.linearisation(y[:-1], self._u(y), self._p(y))
-        A, _ = section_jacobians(np.asarray(J_w), np.asarray(J_u), self.tr.m, self.tr.n_g)
+        ev = self._evaluate(y)
+        J_w = ev.F_w.copy()
+        J_w[self.tr.n_g :, : self.tr.m] += np.eye(self.tr.m)  # ∂[G; P]/∂w from ∂F/∂w
+        A, _ = section_jacobians(J_w, ev.F_u, self.tr.m, self.tr.n_g)
         return np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
 
     def certified(self, y: np.ndarray) -> LimitCycle | None:
@@ -545,6 +556,7 @@ class _Follower:
             verify=self.verify,
             tol=self.tol,
             discretisation_error=error,
+            evaluation=self._evaluate(y),
         )
 
     def _unit_lambda(self) -> np.ndarray:
@@ -553,12 +565,9 @@ class _Follower:
         return t
 
     def _discretisation_error(self, y: np.ndarray) -> float:
-        fine = transcription(type(self.model0), _doubled(self.tr.disc), self.tr.cycles)
-        p = self._p(y)
-        u = self._u(y)
-        F_fine = np.asarray(fine.residual(y[:-1], u, p), dtype=float).ravel()
-        _, F_w, _, _ = self.tr.residual_jacobians(y[:-1], u, p)
-        return float(np.max(np.abs(np.linalg.solve(np.asarray(F_w), F_fine))))
+        F_fine = self.tr.fine_residual(y[:-1], self._u(y), self._p(y))
+        F_w = self._evaluate(y).F_w
+        return float(np.max(np.abs(np.linalg.solve(F_w, F_fine))))
 
     # -- the loop ----------------------------------------------------------------------------
     def run(self) -> _Follower:

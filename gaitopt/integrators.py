@@ -8,16 +8,34 @@ parameters, so CasADi differentiates it exactly (the sensitivities of the discre
 
 from __future__ import annotations
 
+import importlib.util
+from pathlib import Path
+
 import casadi as ca
 import numpy as np
-from scipy.integrate import DOP853
 
 __all__ = ["rk_step", "segment_function", "segment_trajectory_function", "ORDER"]
 
-_A = np.asarray(DOP853.A, dtype=float)
-_B = np.asarray(DOP853.B, dtype=float)
-_C = np.asarray(DOP853.C, dtype=float)
-ORDER = DOP853.order  # 8
+
+def _dop853_tableau():
+    """SciPy's DOP853 coefficients (``scipy/integrate/_ivp/dop853_coefficients.py``, plain NumPy
+    arrays), read without importing ``scipy.integrate`` (0.4 s at start-up)."""
+    try:
+        root = Path(importlib.util.find_spec("scipy").origin).parent
+        path = root / "integrate" / "_ivp" / "dop853_coefficients.py"
+        spec = importlib.util.spec_from_file_location("_gaitopt_dop853_coefficients", path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        n = 12  # DOP853.n_stages
+        return module.A[:n, :n], module.B, module.C[:n]
+    except (AttributeError, OSError, TypeError):  # another SciPy layout: the public class
+        from scipy.integrate import DOP853
+
+        return DOP853.A, DOP853.B, DOP853.C
+
+
+_A, _B, _C = (np.asarray(v, dtype=float) for v in _dop853_tableau())
+ORDER = 8  # scipy.integrate.DOP853.order
 
 
 def rk_step(flow: ca.Function, x: ca.SX, u: ca.SX, p: ca.SX, h: ca.SX) -> ca.SX:

@@ -21,6 +21,7 @@ import time
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from functools import cached_property, lru_cache
+from types import SimpleNamespace
 from typing import Any
 
 import casadi as ca
@@ -77,6 +78,7 @@ class Transcription:
 
     def __init__(self, model_cls: type[HybridModel], disc: MultipleShooting, cycles: int):
         structure = model_cls._structure()
+        self.model_cls = model_cls
         self.phases = structure.phases
         self.section = structure.section
         self.cycles = cycles
@@ -87,21 +89,34 @@ class Transcription:
         self.section_index = [states0.index(c) for c in self.section.coordinates]
         m = len(self.section.coordinates)
         self.m = m
+        self._assemblies: dict[int, Any] = {}
 
+        # The layout of w (cheap; the CasADi graph is built only when a function needs it).
+        self.layout = []  # (kind, chain index, offset, shape)
+        offset = m
+        for k, i in enumerate(self.chain):
+            n = self.phases[i].n
+            free_cols = S - 1 if k == 0 else S
+            self.layout.append(("nodes", k, offset, (n, free_cols)))
+            offset += n * free_cols
+            self.layout.append(("duration", k, offset, ()))
+            offset += 1
+        self.size = offset
+        self.n_g = self.size - m
+
+    @cached_property
+    def _graph(self):
+        """The shooting equations as one CasADi MX graph (for IPOPT, the symbolic uses of the
+        curves and the fallback where a model has no kernels)."""
+        model_cls, disc, m, S = self.model_cls, self.disc, self.m, self.disc.segments
         s = ca.MX.sym("s", m)
         u = ca.MX.sym("u", len(model_cls.inputs))
         p = ca.MX.sym("p", len(model_cls.parameter_specs()))
         segment = {
             i: segment_function(ph.flow, disc.steps).map(S) for i, ph in enumerate(self.phases)
         }
-        sampler = {
-            i: segment_trajectory_function(ph.flow, disc.dense).map(S)
-            for i, ph in enumerate(self.phases)
-        }
-
-        z_parts, self.layout = [], []  # layout: (kind, chain index, offset, shape)
-        nodes, durations = [], []
-        offset = m
+        sampler = self._samplers
+        z_parts, nodes, durations = [], [], []
         for k, i in enumerate(self.chain):
             n = self.phases[i].n
             free_cols = S - 1 if k == 0 else S
@@ -109,13 +124,8 @@ class Transcription:
             X = ca.horzcat(self.section.lift(s, p), free) if k == 0 else free
             T = ca.MX.sym(f"T{k}")
             z_parts += [ca.vec(free), T]
-            self.layout.append(("nodes", k, offset, (n, free_cols)))
-            offset += n * free_cols
-            self.layout.append(("duration", k, offset, ()))
-            offset += 1
             nodes.append(X)
             durations.append(T)
-        self.size = offset
         w = ca.vertcat(s, *z_parts)
 
         G, ends, dg, adm, samples = [], [], [], [], []
@@ -138,19 +148,102 @@ class Transcription:
             samples.append(sampler[i](X, u, p, T / S))
         G = ca.vertcat(*G)
         P = x_return[self.section_index]
-        self.n_g = G.shape[0]
         F = ca.vertcat(G, P - s)  # periodicity closes the cycle
-        assert F.shape[0] == self.size, "shooting system must be square"
-
-        self._w, self._u, self._p, self._F = w, u, p, F
-        self._GP, self._x_return = ca.vertcat(G, P), x_return
-        self._checks_out = [
+        assert F.shape[0] == self.size and G.shape[0] == self.n_g, "shooting system not square"
+        checks = [
             ca.vertcat(*ends),  # stacked: phases may differ in dimension
             ca.vertcat(*dg),
             ca.vertcat(*adm),
             ca.vertcat(*durations),
         ]
-        self._samples = samples
+        return SimpleNamespace(
+            w=w, u=u, p=p, F=F, GP=ca.vertcat(G, P), x_return=x_return, checks=checks,
+            samples=samples,
+        )  # fmt: skip
+
+    @cached_property
+    def _samplers(self) -> dict[int, ca.Function]:
+        S, q = self.disc.segments, self.disc.dense
+        return {
+            i: segment_trajectory_function(ph.flow, q).map(S) for i, ph in enumerate(self.phases)
+        }
+
+    _w = property(lambda self: self._graph.w)
+    _u = property(lambda self: self._graph.u)
+    _p = property(lambda self: self._graph.p)
+    _F = property(lambda self: self._graph.F)
+    _GP = property(lambda self: self._graph.GP)
+    _x_return = property(lambda self: self._graph.x_return)
+    _checks_out = property(lambda self: self._graph.checks)
+    _samples = property(lambda self: self._graph.samples)
+
+    # -- the compiled kernels (gaitopt.kernels) ----------------------------------------------
+    def assembly(self, steps: int | None = None):
+        """The shooting system from the compiled kernels (:mod:`gaitopt.kernels.assemble`),
+        with ``steps`` RK steps per segment (default: this mesh's), or None where the model has
+        no kernels."""
+        key = self.disc.steps if steps is None else steps
+        if key not in self._assemblies:
+            from .kernels.assemble import Assembly
+
+            try:
+                self._assemblies[key] = Assembly(self, steps=key)
+            except NotImplementedError:
+                self._assemblies[key] = None
+        return self._assemblies[key]
+
+    def evaluate(self, w, u, p, *, jacobian: bool = True):
+        """The shooting equations at ``w`` (:class:`gaitopt.kernels.assemble.Evaluation`):
+        ``F`` and its Jacobians in one compiled call, with the phase ends, guard rates,
+        admissibility and durations; from the CasADi graph where there are no kernels."""
+        asm = self.assembly()
+        if asm is not None:
+            return asm(w, u, p, jacobian=jacobian)
+        from .kernels.assemble import Evaluation
+
+        F, F_w, F_p, F_u = (np.asarray(v, dtype=float) for v in self.residual_jacobians(w, u, p))
+        x_return = np.asarray(self.linearisation(w, u, p)[3], dtype=float).ravel()
+        ends, dg, adm, durations = (np.asarray(v, dtype=float) for v in self.checks(w, u, p))
+        ends_list, at = [], 0
+        for i in self.chain:
+            n = self.phases[i].n
+            ends_list.append(ends.ravel()[at : at + n])
+            at += n
+        return Evaluation(
+            F.ravel(), F_w, F_u, F_p, x_return, ends_list, dg.ravel(), adm.ravel(),
+            durations.ravel(),
+        )  # fmt: skip
+
+    def fine_residual(self, w, u, p) -> np.ndarray:
+        """``F`` on the mesh with twice the RK steps per segment (the error estimate): only the
+        residual, with no second transcription built."""
+        asm = self.assembly(2 * self.disc.steps)
+        if asm is not None:
+            return asm(w, u, p, jacobian=False).F
+        fine = transcription(self.model_cls, replace(self.disc, steps=2 * self.disc.steps),
+                             self.cycles)  # fmt: skip
+        return np.asarray(fine.residual(w, u, p), dtype=float).ravel()
+
+    def segment_starts(self, w, p) -> list[np.ndarray]:
+        """The segment start states (n × S) of each phase of the chain."""
+        w = np.asarray(w, dtype=float).ravel()
+        x0 = np.asarray(self.section.lift(w[: self.m], p), dtype=float).ravel()
+        out = []
+        for kind, k, off, shape in self.layout:
+            if kind == "nodes":
+                block = w[off : off + shape[0] * shape[1]].reshape(shape, order="F")
+                out.append(np.column_stack([x0, block]) if k == 0 else block)
+        return out
+
+    def sample_numeric(self, w, u, p) -> list[np.ndarray]:
+        """Dense samples of every phase (n × S·(dense + 1)), without the whole graph."""
+        S = self.disc.segments
+        starts = self.segment_starts(w, p)
+        durations = [w[off] for kind, _, off, _ in self.layout if kind == "duration"]
+        return [
+            np.asarray(self._samplers[i](starts[k], u, p, durations[k] / S), dtype=float)
+            for k, i in enumerate(self.chain)
+        ]
 
     # Each function is built on first use: a mesh used only for the error estimate needs just
     # its residual.  Short chains are expanded to SX (their small dense graphs evaluate about
@@ -211,7 +304,7 @@ class Transcription:
     @cached_property
     def checks(self) -> ca.Function:
         """Phase-end states, guard rates, admissibility and durations."""
-        return ca.Function("checks", [self._w, self._u, self._p], self._checks_out)
+        return ca.Function("checks", [self._w, self._u, self._p], list(self._checks_out))
 
     @cached_property
     def sample(self) -> ca.Function:
@@ -299,6 +392,10 @@ def find_limit_cycle(
     method: str = "newton",
     verify: bool = True,
     tol: float = 1e-10,
+    follow: bool | None = None,
+    starts: int = 1,
+    seed: int = 0,
+    scheduler: str | None = None,
 ) -> LimitCycle:
     """Find a periodic orbit (gait) of a hybrid model by multiple shooting.
 
@@ -329,6 +426,20 @@ def find_limit_cycle(
         Largest accepted residual of the shooting equations, target of the discretisation-error
         estimate and, scaled by 1e3, the largest accepted difference between the simulated return
         and the fixed point (the simulation runs at ``rtol = 1e-12``).
+    follow : bool or None
+        Without a ``guess``, at parameters other than the defaults: follow the model's default
+        gait from its default parameters to these (a homotopy, :mod:`gaitopt.homotopy`), so that
+        the gait found is the one the defaults describe, not whichever orbit lies nearest the
+        default start.  ``None`` (default): follow for period-1 gaits when no guess is given;
+        where the gait is lost on the way, a direct solve from the default start is tried too.
+        ``False``: solve directly.  The result's ``route`` says which was done.
+    starts : int
+        More than 1: also run a seeded multi-start search (the default start and ``starts − 1``
+        Latin-hypercube points around it) and list every distinct gait found in ``gaits``.
+    seed : int
+        Seed of the multi-start sample (deterministic).
+    scheduler : str, optional
+        Run the multi-start on the Dask sweep (``"local"`` or a scheduler address).
 
     Returns
     -------
@@ -345,14 +456,48 @@ def find_limit_cycle(
         If an explicit ``guess`` never reaches the next transition in simulation.
     """
     start = time.perf_counter()
+    # -- arguments: every check before any work (issue 9: bad input fails fast) ----------------
+    from .arguments import check_count, check_inputs, check_positive, check_start, section_guess
+    from .errors import MAX_ORBIT_STEPS, StateError
+    from .models import as_model
+
+    model = as_model(model)
     if method not in _METHODS:
         raise GaitoptInputError(f"`method` must be one of {', '.join(_METHODS)}, got {method!r}")
-    if not isinstance(steps, int) or steps < 1:
-        raise GaitoptInputError(f"`steps` must be a positive integer, got {steps!r}")
-    u = model.nominal_input() if inputs is None else np.asarray(inputs, dtype=float).ravel()
-    if u.size != len(model.inputs):
+    steps = check_count(
+        "steps", steps, 1, MAX_ORBIT_STEPS, "the shooting system of a period-k orbit grows "
+        "faster than k (gaitopt.errors.MAX_ORBIT_STEPS)"
+    )  # fmt: skip
+    tol = check_positive("tol", tol, "1e-10")
+    u = check_inputs(model, inputs)
+    if discretisation is not None and not isinstance(discretisation, MultipleShooting):
         raise GaitoptInputError(
-            f"`inputs` must have {len(model.inputs)} entries ({', '.join(model.inputs) or 'none'})"
+            f"`discretisation` must be a MultipleShooting, got {discretisation!r}; e.g. "
+            f"MultipleShooting(segments=4, steps=5)"
+        )
+    if not isinstance(guess, LimitCycle):
+        x_start = model.lift(section_guess(model, guess))  # unknown names: StateError
+        try:
+            check_start(model, x_start, u, 0,
+                        "guess" if guess is not None else "the default start")  # fmt: skip
+        except StateError as exc:
+            if guess is None:
+                raise
+            raise GuessError(str(exc)) from None
+    if starts != 1 or (follow is not False and guess is None and steps == 1):
+        return _find_the_gait_meant(
+            model,
+            guess,
+            follow=follow,
+            starts=starts,
+            seed=seed,
+            scheduler=scheduler,
+            steps=steps,
+            inputs=inputs,
+            discretisation=discretisation,
+            method=method,
+            verify=verify,
+            tol=tol,
         )
     disc = discretisation or MultipleShooting(*type(model).mesh)
     tr = transcription(type(model), disc, steps)
@@ -407,44 +552,105 @@ def find_limit_cycle(
         w0 = tr.pack(s0, *_nodes_from_simulation(sim, tr))
 
     # -- solve, then refine the mesh until the discretisation error is below tol ---------------
-    refinements, disc_error = 0, float("nan")
+    refinements, disc_error, singular = 0, float("nan"), False
     while True:
-        w, converged, iterations = _solve(tr, method, w0, u, p)
-        J_w, J_u, F, x_return = (np.asarray(v, dtype=float) for v in tr.linearisation(w, u, p))
+        w, converged, iterations, ev = _solve(tr, method, w0, u, p)
+        # One Jacobian per Newton step: the last one (at the solution) serves the error
+        # estimate, the multipliers and the input Jacobian.
+        ev = ev if ev is not None else tr.evaluate(w, u, p)
+        F, J_w = ev.F, _gp_jacobian(tr, ev.F_w)
+        # Newton's own stopping test (abstol 1e-12) is stricter than `tol`: a point that meets
+        # `tol` is accepted (and certified) even where Newton stalled just above its abstol.
         # A "converged" point where the equations are not even finite (e.g. a negative duration
         # reached by the line search) is no solution.
-        converged = converged and bool(np.all(np.isfinite(J_w)) and np.all(np.isfinite(F)))
+        finite = bool(np.all(np.isfinite(J_w)) and np.all(np.isfinite(F)))
+        converged = finite and (converged or float(np.max(np.abs(F))) <= tol)
         if not converged:
             break
-        fine = transcription(type(model), replace(disc, steps=2 * disc.steps), steps)
         try:
-            correction = _newton_step(tr, J_w, fine.residual(w, u, p))
+            correction = _newton_step(tr, J_w, tr.fine_residual(w, u, p))
         except np.linalg.LinAlgError:  # a singular shooting Jacobian: not an isolated orbit
-            converged = False
+            converged, singular = False, True
             break
         disc_error = float(np.max(np.abs(correction)))
-        if disc_error <= tol or refinements == _MAX_REFINEMENTS:
+        # The finest mesh is bounded in absolute terms (not only per call), so that a chain of
+        # warm starts (homotopy, libraries) cannot compound refinements without limit.
+        finest = type(model).mesh[1] * 2**_MAX_REFINEMENTS
+        if disc_error <= tol or refinements == _MAX_REFINEMENTS or 2 * disc.steps > finest:
             break
-        disc, tr, w0 = fine.disc, fine, w + correction
+        disc = replace(disc, steps=2 * disc.steps)
+        tr, w0 = transcription(type(model), disc, steps), w + correction
         refinements += 1
 
     residual = float(np.max(np.abs(F))) if np.all(np.isfinite(F)) else float("inf")
-    if not converged or not residual <= tol:
-        durations = np.asarray(tr.checks(w, u, p)[3], dtype=float).ravel()
+    durations = np.asarray(ev.durations, dtype=float).ravel()
+    # A period only where it means something: every phase duration positive and finite.
+    period = (
+        float(np.sum(durations))
+        if durations.size and np.all(np.isfinite(durations)) and np.all(durations > 0)
+        else float("nan")
+    )
+    if singular:
         return fail(
-            f"no periodic orbit found near the guess: {method} stopped with residual "
-            f"{residual:.3g} after {iterations} iterations (tolerance {tol:g}); the gait may not "
-            f"exist at these parameters, or the guess is too far from it: try a closer guess"
-            + (" or the ipopt method" if method == "newton" else ""),
+            f"no isolated gait: the shooting equations are solved (residual {residual:.3g}, "
+            f"tolerance {tol:g}) but their Jacobian is singular there, so the orbit is one of a "
+            f"continuous family (a multiplier exactly 1: the motion does not depend on some "
+            f"coordinate, or a parameter makes a restoring term vanish) and has no fixed point "
+            f"or stability of its own; change the parameter that removes the restoring term",
             residual=residual,
             iterations=iterations,
             durations=durations,
-            period=float(np.sum(durations)),
+            period=period,
+        )
+    if not converged or not residual <= tol:
+        if not np.isfinite(residual):
+            how = (
+                f"{method} diverged: after {iterations} iterations the shooting equations are "
+                f"not even finite (a phase run backwards or far outside the model's range)"
+            )
+        else:
+            how = (
+                f"{method} stopped after {iterations} iterations with residual {residual:.3g}, "
+                f"above the tolerance {tol:g}"
+            )
+        return fail(
+            f"no periodic orbit found near the guess: {how}; the gait may not exist at these "
+            f"parameters, or the guess is too far from it: try a closer guess"
+            + (" or the ipopt method" if method == "newton" else ""),
+            residual=residual,
+            iterations=iterations,
+            durations=durations if np.isfinite(period) else np.zeros(0),
+            period=float("nan"),  # not an orbit: no period
         )
     if disc_error > tol:
-        disc_error_note = f" (above tol {tol:g} after {refinements} refinements)"
-    else:
-        disc_error_note = ""
+        J_F = J_w.copy()
+        J_F[tr.n_g :, : tr.m] -= np.eye(tr.m)
+        condition = float(np.linalg.cond(J_F))
+        return fail(
+            f"no certified gait: the discretisation error estimate {disc_error:.2g} stays above "
+            f"the tolerance {tol:g} after {refinements} mesh refinements "
+            f"({tr.disc.steps} RK steps per segment), so the orbit is known only to about "
+            f"{disc_error:.1g}; the shooting Jacobian's condition number is {condition:.2g} "
+            f"(a multiplier near 1 makes the fixed point sensitive to every error): loosen `tol` "
+            f"to accept that accuracy",
+            residual=residual,
+            iterations=iterations,
+            durations=durations,
+            period=period,
+            discretisation_error=disc_error,
+        )
+    x_star = model.lift(w[: tr.m])
+    rate = np.asarray(model.phases[0].flow(x_star, u, p), dtype=float).ravel()
+    if float(np.max(np.abs(rate))) <= 1e-8 * (1 + float(np.max(np.abs(x_star)))):
+        return fail(
+            "no gait: the orbit found is standing still (an equilibrium: the state does not "
+            "change, zero step length), which solves the shooting equations with any phase "
+            "duration but is not a gait; the gait may not exist at these parameters (a passive "
+            "walker needs a slope), or try a guess with more speed",
+            residual=residual,
+            iterations=iterations,
+        )
+    disc_error_note = ""
     return certify(
         model,
         tr,
@@ -456,8 +662,75 @@ def find_limit_cycle(
         discretisation_error=disc_error,
         note=disc_error_note,
         start=start,
-        linearisation=(J_w, J_u, F, x_return),
+        evaluation=ev,
     )
+
+
+def _find_the_gait_meant(model, guess, *, follow, starts, seed, scheduler, **options) -> LimitCycle:
+    """The homotopy from the defaults and the multi-start search around
+    :func:`find_limit_cycle`'s direct solve (see :mod:`gaitopt.homotopy`)."""
+    from .homotopy import changed_parameters, follow_default_gait, multi_start, path_description
+
+    if not isinstance(starts, int) or isinstance(starts, bool) or not 1 <= starts <= _MAX_STARTS:
+        raise GaitoptInputError(
+            f"`starts` must be an integer from 1 to {_MAX_STARTS}, got {starts!r}; e.g. starts=8"
+        )
+    if not isinstance(seed, int) or isinstance(seed, bool):
+        raise GaitoptInputError(f"`seed` must be an integer, got {seed!r}; e.g. seed=0")
+    start = time.perf_counter()
+    steps = options.pop("steps")
+    direct = lambda: find_limit_cycle(model, guess, steps=steps, follow=False, **options)  # noqa: E731
+    cycle = None
+    if guess is None and steps == 1 and follow is not False:
+        followed = follow_default_gait(model, **options)
+        if followed is not None and followed.success:
+            cycle = followed
+        elif followed is not None:  # lost on the way: try the default start directly
+            cycle = direct()
+            lost = followed.message
+            if cycle.success:
+                cycle = replace(
+                    cycle,
+                    message=f"{cycle.message}; found from the default start ({lost})",
+                    route=f"direct from the default start; {lost}",
+                )
+            else:
+                cycle = replace(
+                    cycle,
+                    message=(
+                        f"no gait found. Following the default gait from the default parameters "
+                        f"({path_description(changed_parameters(model))}): {lost}. From the "
+                        f"default start: {cycle.message}. Try `--starts 16` (a multi-start "
+                        f"search), a --guess near a gait you know, or `gaitopt continue` to see "
+                        f"where the branch ends"
+                    ),
+                    route="homotopy from the defaults, then direct from the default start",
+                )
+    if cycle is None:
+        cycle = direct()
+        if guess is None and not cycle.route:
+            cycle = replace(cycle, route="direct from the default start")
+    if starts > 1:
+        gaits = multi_start(
+            model, starts, seed=seed, steps=steps, scheduler=scheduler,
+            **{k: v for k, v in options.items() if k in ("inputs", "method", "tol")},
+        )  # fmt: skip
+        if not cycle.success and gaits:  # the multi-start found what the default route did not
+            best = gaits[0]
+            cycle = find_limit_cycle(
+                model,
+                {k: best["fixed_point"][k] for k in model.section.coordinates},
+                steps=steps,
+                follow=False,
+                **options,
+            )
+        count = f"{len(gaits)} distinct gait(s) from {starts} starts (seed {seed})"
+        cycle = replace(cycle, gaits=gaits, message=f"{cycle.message}; multi-start: {count}")
+    return replace(cycle, solve_time=time.perf_counter() - start)
+
+
+#: Most starts of one multi-start search (each a full solve: 1000 take minutes).
+_MAX_STARTS = 1000
 
 
 def certify(
@@ -473,6 +746,7 @@ def certify(
     note: str = "",
     start: float | None = None,
     linearisation: tuple[np.ndarray, ...] | None = None,
+    evaluation: Any = None,
 ) -> LimitCycle:
     """Check a solution ``w`` of the shooting equations and build its :class:`LimitCycle`.
 
@@ -483,12 +757,13 @@ def certify(
     """
     start = time.perf_counter() if start is None else start
     p = model.p
+    ev = evaluation if evaluation is not None else tr.evaluate(w, u, p)
     if linearisation is None:
-        linearisation = tr.linearisation(w, u, p)
+        linearisation = (_gp_jacobian(tr, ev.F_w), ev.F_u, ev.F, ev.x_return)
     J_w, J_u, F, x_return = (np.asarray(v, dtype=float) for v in linearisation)
     residual = float(np.max(np.abs(F))) if np.all(np.isfinite(F)) else float("inf")
-    ends, dg, adm, durations = (np.asarray(v, dtype=float) for v in tr.checks(w, u, p))
-    durations = durations.ravel()
+    ends, dg, adm = ev.ends, ev.rates, ev.admissible
+    durations = np.asarray(ev.durations, dtype=float).ravel()
     x_star = model.lift(w[: tr.m])
     steps = tr.cycles
     common = dict(
@@ -564,14 +839,21 @@ def certify(
 _MAX_REFINEMENTS = 4
 
 
-def _solve(tr: Transcription, method: str, w0, u, p) -> tuple[np.ndarray, bool, int]:
-    """Newton (plain, then with line search), or IPOPT with positive durations."""
+def _solve(tr: Transcription, method: str, w0, u, p) -> tuple[np.ndarray, bool, int, Any]:
+    """Newton (plain, then with line search), or IPOPT with positive durations; with the
+    evaluation (residual and Jacobians) at the point returned where Newton has it."""
     if method == "newton":
+        if tr.assembly() is not None:
+            w, converged, iterations, ev = newton(tr, w0, u, p)
+            if not converged:
+                w, converged, more, ev = newton(tr, w0, u, p, line_search=True)
+                iterations += more
+            return w, converged, iterations, ev
         w, converged, iterations = _newton(tr.newton, w0, u, p)
         if not converged:
             w, converged, more = _newton(tr.newton_line_search, w0, u, p)
             iterations += more
-        return w, converged, iterations
+        return w, converged, iterations, None
     lbx = np.full(tr.size, -np.inf)
     lbx[tr.duration_index()] = 1e-9
     solver = tr.ipopt()
@@ -581,7 +863,61 @@ def _solve(tr: Transcription, method: str, w0, u, p) -> tuple[np.ndarray, bool, 
         np.asarray(sol["x"], dtype=float).ravel(),
         bool(stats["success"]),
         int(stats["iter_count"]),
+        None,
     )
+
+
+#: Newton's stopping tests (as CasADi's ``rootfinder`` "newton" options before): the largest
+#: residual, the largest step.
+_ABSTOL, _ABSTOL_STEP = _NEWTON["abstol"], _NEWTON["abstolStep"]
+
+
+def newton(tr: Transcription, w0, u, p, *, line_search: bool = False):
+    """Newton on the compiled shooting system: each iteration one compiled call for ``F`` and
+    ``∂F/∂w``, a dense solve, and (with ``line_search``) halving the step until ``‖F‖₂``
+    decreases.  Stops where ``max |F| ≤ 1e-12`` or ``max |step| ≤ 1e-15``; 30 iterations
+    (100 with line search).
+
+    Returns
+    -------
+    (w, converged, iterations, evaluation) : the last point, whether a stopping test passed,
+    the number of Jacobians evaluated and the evaluation at ``w`` (reused by the caller).
+    """
+    asm = tr.assembly()
+    max_iter = 100 if line_search else _NEWTON["max_iter"]
+    w = np.array(w0, dtype=float).ravel()
+    ev = None
+    for iteration in range(1, max_iter + 1):
+        ev = ev if ev is not None else asm(w, u, p)
+        F = ev.F
+        if not (np.all(np.isfinite(F)) and np.all(np.isfinite(ev.F_w))):
+            return w, False, iteration, ev
+        if float(np.max(np.abs(F))) <= _ABSTOL:
+            return w, True, iteration, ev
+        try:
+            step = np.linalg.solve(ev.F_w, F)
+        except np.linalg.LinAlgError:  # exactly singular (a family of orbits): least squares
+            step = np.linalg.lstsq(ev.F_w, F, rcond=None)[0]
+        if float(np.max(np.abs(step))) <= _ABSTOL_STEP:
+            return w, True, iteration, ev
+        if not line_search:
+            w, ev = w - step, None
+            continue
+        norm, alpha = float(F @ F), 1.0
+        while True:
+            trial = asm(w - alpha * step, u, p)
+            if (np.all(np.isfinite(trial.F)) and float(trial.F @ trial.F) < norm) or alpha < 1e-4:
+                break
+            alpha /= 2
+        w, ev = w - alpha * step, trial
+    return w, False, max_iter, ev
+
+
+def _gp_jacobian(tr: Transcription, F_w: np.ndarray) -> np.ndarray:
+    """``∂[G; P]/∂w`` from ``∂F/∂w`` (``F = [G; P − s]``)."""
+    J = np.array(F_w, dtype=float)
+    J[tr.n_g :, : tr.m] += np.eye(tr.m)
+    return J
 
 
 def _newton_step(tr: Transcription, J_w: np.ndarray, F) -> np.ndarray:
@@ -598,7 +934,7 @@ def _newton(solver: ca.Function, w0, u, p) -> tuple[np.ndarray, bool, int]:
 
 
 def _time_limit(model: HybridModel) -> float:
-    return float(getattr(model, "max_phase_time", 30.0))
+    return float(model.max_phase_time)
 
 
 def _nodes_from_simulation(
@@ -675,8 +1011,7 @@ def _check_orbit(model, tr, w, u, p, ends, dg, adm, durations, x_return, x_star)
 
 
 def _orbit_arcs(model, tr, w, u, p, durations) -> list[OrbitArc]:
-    samples = tr.sample(w, u, p)
-    samples = samples if isinstance(samples, (list, tuple)) else [samples]
+    samples = tr.sample_numeric(w, u, p)
     S, q = tr.disc.segments, tr.disc.dense
     arcs, t0 = [], 0.0
     for k, i in enumerate(tr.chain):

@@ -20,18 +20,21 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
-from scipy.integrate import DOP853, LSODA, RK45, OdeSolution, Radau
-from scipy.optimize import brentq
+
+if TYPE_CHECKING:
+    from scipy.integrate import OdeSolution
 
 from .errors import GaitoptInputError
 from .hybrid import HybridModel, Phase, rate_along
 
 __all__ = ["simulate", "Simulation", "Arc", "Event"]
 
-_METHODS = {"DOP853": DOP853, "RK45": RK45, "Radau": Radau, "LSODA": LSODA}
+#: SciPy's ``OdeSolver`` classes by name (``scipy.integrate`` is imported on first use: 0.4 s).
+_METHODS = ("DOP853", "RK45", "Radau", "LSODA")
 # A guard must have been below -_ARM (in units of the guard) before it can fire.
 _ARM = 1e-10
 
@@ -327,7 +330,9 @@ def simulate(
         step_parameters.append(changes)
         return model.replace(**changes).p
 
-    solver_cls = _METHODS[method]
+    import scipy.integrate
+
+    solver_cls = getattr(scipy.integrate, method)
 
     sim = Simulation(False, "completed", "")
     sec_t: list[float] = []
@@ -536,6 +541,9 @@ def _integrate_phase(funcs: _PhaseFunctions, solver_cls, t0, x0, rtol, atol, max
     below ``-_ARM`` in this phase (strict crossings); signs are checked at the step ends and at
     ``_CHECKS_PER_STEP - 1`` interior points of each step, roots located by ``brentq`` on the
     step's dense output."""
+    from scipy.integrate import OdeSolution
+    from scipy.optimize import brentq
+
     kwargs = {"jac": funcs.jac} if method in ("Radau", "LSODA") else {}
     solver = solver_cls(funcs.rhs, t0, x0, t0 + max_time, rtol=rtol, atol=atol, **kwargs)
     n_tr = funcs.events

@@ -1,0 +1,71 @@
+"""Compiled shooting kernels: the structured residual and Jacobian of the shooting equations.
+
+* :mod:`~gaitopt.kernels.symbolic` — per phase, one RK step carrying its derivatives and the
+  transition's guard and reset with theirs (SX functions);
+* :mod:`~gaitopt.kernels.cache` — generated C compiled once per model class, kept in a user cache
+  directory, loaded with ``ca.external`` (interpreted where there is no C compiler);
+* :mod:`~gaitopt.kernels.assemble` — the shooting residual and its Jacobians assembled in NumPy
+  from per-segment blocks, for any mesh and period.
+
+``python -m gaitopt.kernels --warm`` compiles the kernels of every built-in model (``make
+install`` runs it), so that no later call waits for the compiler.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import casadi as ca
+
+from .cache import cache_dir, load
+from .symbolic import kernel_functions
+
+__all__ = ["ModelKernels", "model_kernels", "phase_function", "cache_dir"]
+
+
+class ModelKernels:
+    """The kernels of one model class: ``lift`` and, per phase, ``fold`` and ``end``."""
+
+    def __init__(self, model_cls, *, verbose: bool = True):
+        functions = kernel_functions(model_cls)
+        name = f"gaitopt_{model_cls.__name__.lower()}"
+        loaded = load(name, functions, verbose=verbose)
+        self.compiled = loaded is not functions
+        self.lift = loaded[0]
+        self.fold = loaded[1::2]
+        self.end = loaded[2::2]
+        self.n = [f.size1_in(0) for f in functions[1::2]]
+        self.n_u = len(model_cls.inputs)
+        self.n_p = len(model_cls.parameter_specs())
+
+
+@lru_cache(maxsize=64)
+def model_kernels(model_cls) -> ModelKernels | None:
+    """The (cached) kernels of a model class, or None where the model's functions cannot be
+    evaluated on SX symbols (the caller then uses the shooting graph)."""
+    try:
+        return ModelKernels(model_cls)
+    except (RuntimeError, TypeError, NotImplementedError):
+        return None
+
+
+@lru_cache(maxsize=256)
+def phase_function(model_cls, phase: int, segments: int, steps: int) -> ca.Function:
+    """``phase(X, u, p, hs) -> (X_end, D, g, g_x, g_u, g_p, r, r_x, r_u, r_p, ġ, admissible)``.
+
+    ``X`` (n × segments) holds the segment starts, ``hs`` the segment duration; ``X_end`` the
+    segment ends after ``steps`` RK steps each and ``D`` (n × segments·(n + n_u + n_p + 1)) their
+    derivatives ``∂x_end/∂[x_start; u; p; hs]`` side by side; the rest is the cycle transition
+    at the last segment's end (see :func:`gaitopt.kernels.symbolic.kernel_functions`).
+    """
+    kern = model_kernels(model_cls)
+    n, nu, np_ = kern.n[phase], kern.n_u, kern.n_p
+    fold, end = kern.fold[phase], kern.end[phase]
+    x0, u, p, hs = ca.MX.sym("x0", n), ca.MX.sym("u", nu), ca.MX.sym("p", np_), ca.MX.sym("hs")
+    x, D = x0, ca.MX(ca.horzcat(ca.DM.eye(n), ca.DM.zeros(n, nu + np_ + 1)))
+    for _ in range(steps):
+        x, D = fold(x, D, u, p, hs, steps)
+    segment = ca.Function("segment", [x0, u, p, hs], [x, D]).map(segments)
+    X = ca.MX.sym("X", n, segments)
+    X_end, Ds = segment(X, u, p, hs)
+    return ca.Function(f"phase_{phase}", [X, u, p, hs], [X_end, Ds, *end(X_end[:, -1], u, p)])

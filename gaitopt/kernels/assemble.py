@@ -1,0 +1,192 @@
+"""The shooting residual and its Jacobians assembled in NumPy from the per-segment blocks.
+
+Equations and unknowns are those of :class:`gaitopt.shooting.ShootingProblem` (same order): per
+phase of the chain, the gaps between segments, the guard at the phase end, the reset linking to
+the next phase; then periodicity ``P − s``.  Each segment end ``x_e = Φ(x_start, u, p, T/S)``
+contributes its block ``∂Φ/∂[x_start; u; p; hs]`` (``hs = T/S``, so ``∂/∂T = ∂/∂hs / S``); the
+first segment start of the chain is ``lift(s, p)``, contributing ``∂lift/∂s`` and ``∂lift/∂p``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from . import model_kernels, phase_function
+
+__all__ = ["Evaluation", "Assembly"]
+
+
+@dataclass
+class Evaluation:
+    """The shooting equations at one point: ``F`` and (with ``jacobian``) ``∂F/∂w``, ``∂F/∂u``,
+    ``∂F/∂p``; the return state, each phase's end state, guard rate, admissibility, duration."""
+
+    F: np.ndarray
+    F_w: np.ndarray | None
+    F_u: np.ndarray | None
+    F_p: np.ndarray | None
+    x_return: np.ndarray
+    ends: list[np.ndarray]
+    rates: np.ndarray
+    admissible: np.ndarray
+    durations: np.ndarray
+
+
+class Assembly:
+    """The assembled shooting system of a problem (see the module docstring)."""
+
+    def __init__(self, problem, steps: int | None = None):
+        kern = model_kernels(problem.model_cls)
+        if kern is None:
+            raise NotImplementedError("no kernels for this model class")
+        self.compiled = kern.compiled
+        self.lift = kern.lift
+        S = problem.disc.segments
+        N = problem.disc.steps if steps is None else steps
+        self.S, self.chain, self.m = S, problem.chain, problem.m
+        self.size, self.section_index = problem.size, problem.section_index
+        phase = {i: phase_function(problem.model_cls, i, S, N) for i in set(self.chain)}
+        self.n = [kern.n[i] for i in self.chain]
+        self.n_u, self.n_p = kern.n_u, kern.n_p
+        # (node offset, duration offset) of each chain element
+        self.offsets = [
+            (problem.layout[2 * k][2], problem.layout[2 * k + 1][2]) for k in range(len(self.chain))
+        ]
+        # One call evaluates the whole chain (one flat output: a call from Python costs more
+        # than the kernels of a small model).
+        m = self.m
+        w = ca.MX.sym("w", self.size)
+        u, p = ca.MX.sym("u", self.n_u), ca.MX.sym("p", self.n_p)
+        outs = list(self.lift(w[:m], p))
+        for k, i in enumerate(self.chain):
+            n, (off, off_T) = self.n[k], self.offsets[k]
+            if k == 0:
+                X = ca.horzcat(outs[0], ca.reshape(w[off : off + n * (S - 1)], n, S - 1))
+            else:
+                X = ca.reshape(w[off : off + n * S], n, S)
+            outs += list(phase[i](X, u, p, w[off_T] / S))
+        self.shapes = [o.shape for o in outs]
+        self.chain_function = ca.Function("chain", [w, u, p], [ca.vertcat(*map(ca.vec, outs))])
+
+    def _outputs(self, w, u, p) -> list[np.ndarray]:
+        flat = np.asarray(self.chain_function(w, u, p), dtype=float).ravel()
+        out, at = [], 0
+        for rows, cols in self.shapes:
+            out.append(flat[at : at + rows * cols].reshape(rows, cols, order="F"))
+            at += rows * cols
+        return out
+
+    def __call__(self, w, u, p, *, jacobian: bool = True) -> Evaluation:
+        # A diverging Newton iterate gives non-finite blocks: reported by the caller, not warned.
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+            return self._assemble(w, u, p, jacobian)
+
+    def _assemble(self, w, u, p, jacobian: bool) -> Evaluation:
+        w = np.asarray(w, dtype=float).ravel()
+        u = np.asarray(u, dtype=float).ravel()
+        p = np.asarray(p, dtype=float).ravel()
+        S, m, size, nu, np_ = self.S, self.m, self.size, self.n_u, self.n_p
+        F = np.empty(size)
+        J = np.zeros((size, size)) if jacobian else None
+        Ju = np.zeros((size, nu)) if jacobian else None
+        Jp = np.zeros((size, np_)) if jacobian else None
+        outputs = self._outputs(w, u, p)
+        x_lift, L_s, L_p = outputs[:3]
+        x_lift = x_lift.ravel()
+        K = len(self.chain)
+        ends, rates, adm, durations = [], np.empty(K), np.empty(K), np.empty(K)
+        row = 0
+        for k in range(K):
+            n = self.n[k]
+            off, off_T = self.offsets[k]
+            if k == 0:
+                X = np.column_stack(
+                    [x_lift, w[off : off + n * (S - 1)].reshape(n, S - 1, order="F")]
+                )
+            else:
+                X = w[off : off + n * S].reshape(n, S, order="F")
+            T = w[off_T]
+            X_end, Ds, g, g_x, g_u, g_p, r, r_x, r_u, r_p, rate, a = outputs[
+                3 + 12 * k : 15 + 12 * k
+            ]
+            q = n + nu + np_ + 1
+            durations[k], rates[k], adm[k] = T, float(rate.ravel()[0]), float(a.ravel()[0])
+            ends.append(X_end[:, -1])
+
+            def start_col(j: int, k: int = k, off: int = off, n: int = n) -> int | None:
+                """Column of ``w`` where segment start j's block begins (None: the lift)."""
+                if k == 0:
+                    return None if j == 0 else off + n * (j - 1)
+                return off + n * j
+
+            def add_state(R: slice, j: int, M: np.ndarray, n: int = n, start_col=start_col) -> None:
+                """Add ``M · ∂(segment start j)/∂(w, p)`` to the rows ``R``."""
+                c = start_col(j)
+                if c is None:
+                    J[R, :m] += M @ L_s
+                    Jp[R] += M @ L_p
+                else:
+                    J[R, c : c + n] += M
+
+            # -- close the gaps ------------------------------------------------------------
+            F[row : row + n * (S - 1)] = (X[:, 1:] - X_end[:, :-1]).ravel(order="F")
+            if jacobian:
+                eye = np.eye(n)
+                for j in range(S - 1):
+                    R = slice(row + j * n, row + (j + 1) * n)
+                    D = Ds[:, j * q : (j + 1) * q]
+                    add_state(R, j + 1, eye)
+                    add_state(R, j, -D[:, :n])
+                    J[R, off_T] -= D[:, -1] / S
+                    Ju[R] -= D[:, n : n + nu]
+                    Jp[R] -= D[:, n + nu : n + nu + np_]
+            row += n * (S - 1)
+            # -- the end state's derivative, for the guard, the link and periodicity -------
+            if jacobian:
+                D = Ds[:, (S - 1) * q :]
+                E = np.zeros((n, size))
+                E_p = D[:, n + nu : n + nu + np_].copy()
+                c = start_col(S - 1)
+                if c is None:
+                    E[:, :m] = D[:, :n] @ L_s
+                    E_p += D[:, :n] @ L_p
+                else:
+                    E[:, c : c + n] = D[:, :n]
+                E[:, off_T] += D[:, -1] / S
+                E_u = D[:, n : n + nu]
+            g = g.ravel()
+            R = slice(row, row + g.size)
+            F[R] = g
+            if jacobian:
+                J[R] += g_x @ E
+                Ju[R] += g_x @ E_u + g_u
+                Jp[R] += g_x @ E_p + g_p
+            row += g.size
+            r = r.ravel()
+            if k + 1 < K:
+                n1 = self.n[k + 1]
+                off1 = self.offsets[k + 1][0]
+                R = slice(row, row + n1)
+                F[R] = w[off1 : off1 + n1] - r
+                if jacobian:
+                    J[R, off1 : off1 + n1] += np.eye(n1)
+                    J[R] -= r_x @ E
+                    Ju[R] -= r_x @ E_u + r_u
+                    Jp[R] -= r_x @ E_p + r_p
+                row += n1
+            else:
+                x_return = r
+                sec = self.section_index
+                R = slice(row, row + m)
+                F[R] = r[sec] - w[:m]
+                if jacobian:
+                    J[R] += (r_x @ E)[sec]
+                    J[R, :m] -= np.eye(m)
+                    Ju[R] += (r_x @ E_u + r_u)[sec]
+                    Jp[R] += (r_x @ E_p + r_p)[sec]
+                row += m
+        assert row == size
+        return Evaluation(F, J, Ju, Jp, x_return, ends, rates, adm, durations)
