@@ -24,7 +24,7 @@ import matplotlib
 matplotlib.use("Agg")
 
 import gaitopt  # noqa: E402
-from gaitopt.cli_optimize import _write  # noqa: E402
+from gaitopt.cli.optimize import _write  # noqa: E402
 from gaitopt.files import write_csv  # noqa: E402
 
 OPTIMTRAJ = {"GPOPS-IPOPT": 263.69884582, "GPOPS-SNOPT": 302.25469438}  # 8c43235 logs

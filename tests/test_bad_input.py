@@ -92,7 +92,7 @@ def test_a_library_input_error_from_anywhere_is_exit_2(capsys, monkeypatch):
     def deep(*args, **kwargs):
         raise gaitopt.StateError("planar_juggler: a state needs 6 finite values")
 
-    monkeypatch.setattr(cli, "find_limit_cycle", deep)
+    monkeypatch.setattr(cli.solve, "find_limit_cycle", deep)
     line = bad_input(capsys, "solve", "compass_gait")
     assert "a state needs 6 finite values" in line
 

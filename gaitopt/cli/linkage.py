@@ -20,9 +20,9 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from .errors import ParameterError, did_you_mean
-from .linkage import LINKAGES
-from .parameters import check_parameter
+from ..errors import ParameterError, did_you_mean
+from ..linkage import LINKAGES
+from ..parameters import check_parameter
 
 __all__ = ["HELP", "add_arguments", "run", "describe"]
 
@@ -56,7 +56,7 @@ def describe(name: str, settings: list[str] | None, samples: int) -> dict[str, A
     gaitopt.cli.InputError
         For bad input, on one line naming the argument.
     """
-    from .cli import InputError, _echo, _number, _split
+    from .common import InputError, _echo, _number, _split
 
     if name not in LINKAGES:
         raise InputError(
@@ -90,7 +90,7 @@ def describe(name: str, settings: list[str] | None, samples: int) -> dict[str, A
 
 def run(args: argparse.Namespace) -> int:
     """Print the linkage's numbers; 0, or :class:`gaitopt.cli.InputError` for bad input."""
-    from .cli import EXIT_OK, _print_json
+    from .common import EXIT_OK, _print_json
 
     report = describe(args.linkage, args.set, args.samples)
     if args.json:

@@ -27,7 +27,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from .errors import GaitoptInputError, did_you_mean
+from ..errors import GaitoptInputError, did_you_mean
 
 __all__ = ["add_arguments", "run", "HELP"]
 
@@ -37,7 +37,7 @@ _FIXABLE = ("period", "step_length", "speed")
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the arguments of ``gaitopt optimize``."""
-    from .cli import _count, _model_arguments
+    from .common import _count, _model_arguments
 
     _model_arguments(parser)
     parser.add_argument(
@@ -70,7 +70,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _parse(args: argparse.Namespace, model: Any) -> dict[str, Any]:
-    from .cli import InputError, _assignments
+    from .common import InputError, _assignments
 
     fixed = _assignments(
         "--fix", args.fix, {"period": "period=0.8", "step_length": "step_length=0.3"}
@@ -84,9 +84,7 @@ def _parse(args: argparse.Namespace, model: Any) -> dict[str, Any]:
         if not value > 0:
             raise InputError(f"--fix {item}: must be positive, e.g. --fix {name}=0.8")
     examples = {n: f"{n}=10" for n in model.inputs} or {"INPUT": "INPUT=10"}
-    bounds = {
-        n: max(abs(lo), abs(hi)) for n, (lo, hi) in model.input_bounds.items()
-    }
+    bounds = {n: max(abs(lo), abs(hi)) for n, (lo, hi) in model.input_bounds.items()}
     for name, (item, value) in _assignments("--bound", args.bound, examples).items():
         if name not in model.inputs:
             raise InputError(
@@ -113,7 +111,8 @@ def _parse(args: argparse.Namespace, model: Any) -> dict[str, Any]:
 
 def run(args: argparse.Namespace) -> int:
     """``gaitopt optimize``: the optimal gait, verified by simulation, with its multipliers."""
-    from .cli import (
+    from ..optimize import optimize_gait
+    from .common import (
         EXIT_BAD_INPUT,
         EXIT_NOT_FOUND,
         EXIT_OK,
@@ -123,7 +122,6 @@ def run(args: argparse.Namespace) -> int:
         build_model,
         write_outputs,
     )
-    from .optimize import optimize_gait
 
     model = build_model(args.model, args.set)
     options = _parse(args, model)
@@ -152,7 +150,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _print(report: dict[str, Any]) -> None:
-    from .cli import _print_rows
+    from .common import _print_rows
 
     rows = [
         ("model", report["model"]),
@@ -180,11 +178,11 @@ def _write(gait: Any, report: dict[str, Any], folder: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .animation import animate_walker
-    from .files import write_csv, write_json
-    from .optimize.verify import feedforward_of
-    from .plotting import save_figure
-    from .simulation import simulate
+    from ..animation import animate_walker
+    from ..files import write_csv, write_json
+    from ..optimize.verify import feedforward_of
+    from ..plotting import save_figure
+    from ..simulation import simulate
 
     folder.mkdir(parents=True, exist_ok=True)
     write_json(report, folder / "optimal.json")

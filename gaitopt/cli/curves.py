@@ -18,7 +18,10 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .cli import (
+from ..curves import CURVE_KINDS, Curve, bifurcation_curve
+from ..errors import GuessError, ParameterError, did_you_mean
+from ..parameters import check_parameter
+from .common import (
     EXIT_NOT_FOUND,
     EXIT_OK,
     InputError,
@@ -31,9 +34,6 @@ from .cli import (
     build_model,
     parse_guess,
 )
-from .curves import CURVE_KINDS, Curve, bifurcation_curve
-from .errors import GuessError, ParameterError, did_you_mean
-from .parameters import check_parameter
 
 __all__ = ["add_curve_arguments", "wants_curve", "run_curve"]
 
@@ -137,13 +137,13 @@ def run_curve(args: argparse.Namespace) -> int:
 
 def write_curve(curve: Curve, folder: Path) -> None:
     """curve.json, curve.csv and curve.png in ``folder`` (each written atomically)."""
-    from .files import write_csv, write_json
-    from .plotting import save_figure
+    from ..files import write_csv, write_json
+    from ..plotting import save_figure
 
     folder.mkdir(parents=True, exist_ok=True)
     write_json(curve.as_dict(), folder / "curve.json")
     if curve.cycles:
-        from .curves.plot import plot_curve
+        from ..curves.plot import plot_curve
 
         write_csv(*curve.csv_rows(), folder / "curve.csv")
         fig, _ = plot_curve(curve)
