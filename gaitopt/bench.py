@@ -24,7 +24,7 @@ measures
   impacts; the time reported is that of a fresh simulation to the same end time without the
   monitor (the monitored time is in the JSON too), so Drake is not charged for Python callbacks.
 
-and compares every fixed point with gaitopt's and with DESIGN.md's reference numbers.
+and compares every fixed point with gaitopt's and with docs/design.md's reference numbers.
 
 **Step-to-step control** (``--no-control`` skips it): one deadbeat decision of the SLIP's
 touchdown angle from an apex (``P(z, θ) = z*``), timed
@@ -70,9 +70,9 @@ from .files import write_json
 
 __all__ = ["main", "run"]
 
-# -- reference numbers (DESIGN.md, "Reference numbers the tests must meet") ---------------------
+# -- reference numbers (docs/design.md, "Reference numbers the tests meet") ---------------------
 _VDP_PERIOD = 6.6632868593231301897  # Hairer, Nørsett & Wanner, μ = 1
-_COMPASS = {  # DESIGN.md; agrees with Drake's CompassGait simulated to convergence (7 digits)
+_COMPASS = {  # docs/design.md; agrees with Drake's CompassGait simulated to convergence (7 digits)
     "stance": -0.2187746,
     "swing": 0.3237746,
     "stance_dot": 1.0928668,
@@ -89,7 +89,7 @@ def _reference(name: str, model: Any) -> tuple[str, Callable[[dict, float], floa
         w = model.rolling_speed()
         return "theta_dot vs closed form ω*", lambda x, T: abs(x["theta_dot"] - w)
     if name == "compass_gait" and model.params == type(model)().params:
-        return "state vs DESIGN.md (7 digits)", lambda x, T: max(
+        return "state vs docs/design.md (7 digits)", lambda x, T: max(
             abs(x[k] - v) for k, v in _COMPASS.items()
         )
     if name == "simplest_walker" and model.params.get("slope") == 0.009:

@@ -111,9 +111,7 @@ def follow_default_gait(model: HybridModel, **options: Any) -> LimitCycle | None
             return replace(
                 trial,
                 success=False,
-                message=(
-                    f"the default gait was lost at {where} ({s:.3g} of the way): {reason}"
-                ),
+                message=(f"the default gait was lost at {where} ({s:.3g} of the way): {reason}"),
                 route=route,
             )
     return replace(

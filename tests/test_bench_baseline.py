@@ -24,7 +24,7 @@ def _solve(name: str, start=None) -> baselines.BaselineResult:
 
 
 def test_compass_gait_baseline_reproduces_design_fixed_point():
-    # Source: DESIGN.md, "Reference numbers" — compass gait at the defaults (agrees with Drake's
+    # Source: docs/design.md, reference numbers — compass gait at the defaults (agrees with Drake's
     # CompassGait simulated to convergence); given to 7 digits, so 1e-7.
     r = _solve("compass_gait")
     expected = [-0.2187746, 0.3237746, 1.0928668, 0.3761346]
@@ -35,7 +35,7 @@ def test_compass_gait_baseline_reproduces_design_fixed_point():
 
 def test_rimless_wheel_baseline_reproduces_closed_form():
     # Source: Tedrake, Underactuated Robotics, §rimless wheel: ω* = cot 2α sqrt(4 g/l sin α sin γ)
-    # (1.095462839648 rad/s at the defaults, DESIGN.md); map slope cos² 2α = 0.5 for 8 spokes.
+    # (1.095462839648 rad/s at the defaults, docs/design.md); map slope cos² 2α = 0.5 for 8 spokes.
     m = gaitopt.model("rimless_wheel")
     r = _solve("rimless_wheel")
     assert math.isclose(r.fixed_point["theta_dot"], m.rolling_speed(), abs_tol=1e-9)

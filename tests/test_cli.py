@@ -82,7 +82,7 @@ def test_solve_compass_gait_json_matches_drake(capsys):
     assert result["steps"] == 1
     assert result["params"]["slope"] == 0.0525  # docs/design.md default
     assert result["state_names"] == ["stance", "swing", "stance_dot", "swing_dot"]
-    # Source: docs/design.md "Reference numbers" — Drake's CompassGait simulated to convergence at the
+    # Source: docs/design.md reference numbers — Drake's CompassGait simulated to convergence at the
     # defaults: step period 0.7344606 s, post-impact state [−0.2187746, 0.3237746, 1.0928668,
     # 0.3761346]. Tolerance 1e-6 (the reference is given to 7 decimals).
     assert math.isclose(result["period"], 0.7344606, abs_tol=1e-6)
@@ -106,7 +106,7 @@ def test_solve_text_summary(capsys):
 
 
 def test_solve_simplest_walker_unstable_short_step_gait(capsys):
-    # Source: Garcia, Chatterjee, Ruina & Coleman 1998 (via docs/design.md), slope 0.009: the unstable
+    # Source: Garcia, Chatterjee, Ruina & Coleman 1998 (docs/design.md), slope 0.009: the unstable
     # short-step gait θ* = 0.19393736960624, θ̇* = −0.20386692731962. Tolerance 1e-8: Newton
     # converges to residual < 1e-10 and the published values have 14 digits.
     status, result = run_json(
@@ -247,7 +247,7 @@ def test_console_script_bad_input(tmp_path):
 # -- running and control (issue 3) --------------------------------------------------------------
 @pytest.mark.parametrize(("z", "stable"), [(0.87, True), (0.92, False)])
 def test_solve_slip_textbook_fixed_points(capsys, z, stable):
-    # Source: docs/design.md "Reference numbers" (Tedrake's SLIP apex map): a stable fixed point near
+    # Source: docs/design.md (Tedrake's SLIP apex map): a stable fixed point near
     # z = 0.87 m and an unstable one near 0.92 m; "near": within 1 cm.
     status, result = run_json(capsys, "solve", "slip", "--guess", f"z={z}", "--json")
     assert status == 0 and result["success"] is True

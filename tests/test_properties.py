@@ -65,9 +65,7 @@ def cases(draw, name: str):
     guess = None
     if draw(st.booleans()):
         centre = cls().default_start()
-        guess = {
-            k: v + draw(st.floats(-0.1, 0.1)) * (abs(v) + 0.1) for k, v in centre.items()
-        }
+        guess = {k: v + draw(st.floats(-0.1, 0.1)) * (abs(v) + 0.1) for k, v in centre.items()}
     return params, guess
 
 

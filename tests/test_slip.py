@@ -89,7 +89,7 @@ def test_the_map_limits_are_named_falls_not_crashes(slip):
 
 
 def test_energy_is_conserved_through_every_phase_and_reset(slip, gaits):
-    # Invariant: the SLIP is conservative (docs/design.md "Invariants").  Along each simulated arc and
+    # Invariant: the SLIP is conservative (docs/design.md, invariants). Along each simulated arc and
     # across touchdown, liftoff and apex the energy stays at the parameter E; tolerance 1e-8
     # relative (rtol 1e-11 over a few steps).
     x0 = gaits[0.92].x + np.array([0.0, 0.01, 0.0, 0.0])

@@ -19,14 +19,25 @@ from .vanderpol import VanDerPol
 from .vertical_hopper import VerticalHopper
 
 __all__ = [
-    "REGISTRY", "model", "as_model", "register", "unregister", "BouncingBall", "CompassGait", "KneedWalker", "LineJuggler",
+    "REGISTRY",
+    "model",
+    "as_model",
+    "register",
+    "unregister",
+    "BouncingBall",
+    "CompassGait",
+    "KneedWalker",
+    "LineJuggler",
     "FiveLinkBiped",
     "PlanarJuggler",
     "BallisticWalker",
     "RaibertHopper",
-    "RimlessWheel", "SimplestWalker", "Slip", "VanDerPol",
+    "RimlessWheel",
+    "SimplestWalker",
+    "Slip",
+    "VanDerPol",
     "VerticalHopper",
-]  # fmt: skip
+]
 
 REGISTRY: dict[str, type[HybridModel]] = {
     cls.name: cls

@@ -11,7 +11,7 @@ the knee; leg length ``L = l_s + l_t`` (1 m at the defaults).  Point masses: the
 each leg a shank mass ``m_s`` at ``a1`` above the foot (``b1`` below the knee) and a thigh mass
 ``m_t`` at ``a2`` above the knee (``b2`` below the hip).  The stance leg's knee stays locked.
 
-**State** (docs/design.md): ``q1`` stance leg, ``q2`` swing thigh, ``q3`` swing shank, absolute angles
+**State**: ``q1`` stance leg, ``q2`` swing thigh, ``q3`` swing shank, absolute angles
 from vertical in the compass gait's (Drake's) sign convention: a link's angle is that of the
 vector from its lower to its upper end, positive when it leans downhill (+x).  The swing knee is
 flexed (foot trailing) when ``q3 > q2``.
