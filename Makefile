@@ -29,11 +29,11 @@ studies: $(STAMP)
 
 bench: $(STAMP)
 	-$(BIN)/python -m pip install --quiet -e '.[peers]' || echo "Drake not installable here: benchmarking without peers"
-	MPLBACKEND=Agg $(BIN)/python -m gaitopt.bench --out results/bench.json
+	MPLBACKEND=Agg $(BIN)/python -m bench --out results/bench.json
 
 lint: $(STAMP)
-	$(BIN)/ruff check gaitopt tests problems
-	$(BIN)/ruff format --check gaitopt tests problems
+	$(BIN)/ruff check gaitopt tests problems bench
+	$(BIN)/ruff format --check gaitopt tests problems bench
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .ruff_cache

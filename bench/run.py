@@ -3,7 +3,7 @@ write today.
 
 For each registered model::
 
-    python -m gaitopt.bench --out results/bench.json
+    python -m bench --out results/bench.json
 
 measures
 
@@ -13,7 +13,7 @@ measures
 * **gaitopt, once built** — the median of ``--built-repeats`` further calls in this process, with
   ``verify=False`` (the cycle with its multipliers) and ``verify=True`` (plus the independent
   SciPy simulation from the fixed point);
-* **a hand-written baseline** (:mod:`gaitopt._bench_baselines`): single shooting with
+* **a hand-written baseline** (:mod:`bench.baselines`): single shooting with
   ``solve_ivp`` events and ``scipy.optimize.fsolve`` on the return map from the same start,
   multipliers by finite differences of the simulated map — median of ``--repeats`` runs;
 * **Drake** (only where ``pydrake`` imports: ``pip install -e '.[peers]'``): ``CompassGait`` and
@@ -64,9 +64,13 @@ from typing import Any
 
 import numpy as np
 
-from . import _bench_baselines as baselines
-from . import _bench_branches, _bench_curves, _bench_optimize
-from .files import write_json
+from gaitopt.files import write_json
+
+from . import baselines
+from . import branches as _bench_branches
+from . import curves as _bench_curves
+from . import optimize as _bench_optimize
+from . import speed as _bench_speed
 
 __all__ = ["main", "run"]
 
@@ -373,6 +377,7 @@ def _drake(drake: Any, model: Any, repeats: int, converge: bool) -> dict[str, An
         "runs": {},
     }
     plans = [("settle, accuracy 1e-4 (default)", 1e-4, 1e-5, 200, repeats)]
+    plans.append(("settle to 1e-08, accuracy 1e-4 (default)", 1e-4, 1e-8, 200, repeats))
     plans.append(("settle, accuracy 1e-10", 1e-10, 1e-5, 200, max(1, min(repeats, 3))))
     if converge:
         plans.append(("converge, accuracy 1e-4 (default)", 1e-4, 1e-10, 100, 1))
@@ -408,6 +413,7 @@ def run(
     control: bool = True,
     decisions: int = 200,
     branches: bool = True,
+    speed: bool = True,
     quick: bool = False,
     log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True),
 ) -> dict[str, Any]:
@@ -419,7 +425,7 @@ def run(
     drake, drake_import = _import_drake() if peers else (None, "disabled (--no-peers)")
     record: dict[str, Any] = {
         "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-        "command": " ".join([Path(sys.executable).name, "-m", "gaitopt.bench", *sys.argv[1:]]),
+        "command": " ".join([Path(sys.executable).name, "-m", "bench", *sys.argv[1:]]),
         "machine": _machine(),
         "repeats": {
             "first_call_processes": repeats,
@@ -462,6 +468,12 @@ def run(
         _compare(model, entry)
         record["models"][name] = entry
     record["goals"] = _goals(record)
+    if speed:
+        log("[bench] issue 12: whole processes (gaitopt and Drake), period-8 vs period-1")
+        try:
+            record["speed"] = _bench_speed.run(repeats=repeats, drake=drake is not None)
+        except Exception as err:  # report, never sink the benchmark
+            record["speed"] = {"skipped": f"{type(err).__name__}: {err}"}
     if control:
         log(f"[bench] slip deadbeat decision: Python, generated C, simulation ({decisions}×)")
         try:
@@ -484,6 +496,7 @@ def run(
             record["optimize"] = _bench_optimize.run(quick=quick)
         except Exception as err:  # report, never sink the benchmark
             record["optimize"] = {"skipped": f"{type(err).__name__}: {err}"}
+    record["goals_issue_12"] = _bench_speed.goals(record)
     record["elapsed_s"] = time.perf_counter() - started
     return record
 
@@ -915,13 +928,16 @@ def format_table(record: dict[str, Any]) -> str:
     if "optimize" in record:
         o = record["optimize"]
         lines += ["", _bench_optimize.table(o) if "skipped" not in o else f"optimize: {o}"]
+    if "speed" in record and "skipped" in record["speed"]:
+        lines += ["", f"speed: {record['speed']}"]
+    lines += ["", _bench_speed.table(record)]
     lines.append(f"Total benchmark time: {record['elapsed_s']:.0f} s.")
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m gaitopt.bench",
+        prog="python -m bench",
         description="Time find_limit_cycle against a hand-written SciPy baseline and Drake.",
     )
     parser.add_argument(
@@ -962,6 +978,11 @@ def main(argv: list[str] | None = None) -> int:
         "--no-branches", action="store_true", help="skip the continuation and sweep timings"
     )
     parser.add_argument(
+        "--no-speed",
+        action="store_true",
+        help="skip issue 12's whole-process and period-k timings",
+    )
+    parser.add_argument(
         "--quick",
         action="store_true",
         help="2 repeats, 5 calls once built, no Drake convergence runs",
@@ -987,6 +1008,7 @@ def main(argv: list[str] | None = None) -> int:
         control=not args.no_control,
         decisions=max(20, args.decisions // (4 if args.quick else 1)),
         branches=not args.no_branches,
+        speed=not args.no_speed,
         quick=args.quick,
     )
     record["table"] = rows(record)

@@ -18,9 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from .continuation import PseudoArclength, continuation
-from .models import model as make_model
-from .sweep import simulate_task, sweep
+from gaitopt.continuation import PseudoArclength, continuation
+from gaitopt.models import model as make_model
+from gaitopt.sweep import simulate_task, sweep
 
 __all__ = ["run"]
 

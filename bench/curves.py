@@ -26,9 +26,9 @@ from typing import Any
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from .continuation import continuation
-from .curves import ParameterPath, curve_from
-from .models import model as make_model
+from gaitopt.continuation import continuation
+from gaitopt.curves import ParameterPath, curve_from
+from gaitopt.models import model as make_model
 
 __all__ = ["run", "table"]
 

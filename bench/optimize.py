@@ -22,10 +22,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .models import model as make_model
-from .optimize import optimize_gait
-from .optimize.collocation import rate_along
-from .optimize.problem import GaitProblem
+from gaitopt.models import model as make_model
+from gaitopt.optimize import optimize_gait
+from gaitopt.optimize.collocation import rate_along
+from gaitopt.optimize.problem import GaitProblem
 
 __all__ = ["run", "hermite_simpson_compass", "table"]
 

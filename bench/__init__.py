@@ -1,0 +1,8 @@
+"""``make bench``: gaitopt's speed and accuracy against baselines measured in the same run.
+
+Kept outside the ``gaitopt`` package (it is not installed with it and never imported by it):
+``python -m bench --out results/bench.json`` from the project's root.  Modules: :mod:`bench.run`
+(the driver, the table and the goals), :mod:`bench.baselines` (hand-written SciPy return maps),
+:mod:`bench.branches` (continuation and sweeps), :mod:`bench.curves` (two-parameter curves),
+:mod:`bench.optimize` (optimal gaits).
+"""
