@@ -70,7 +70,7 @@ from dataclasses import dataclass
 import casadi as ca
 
 from ..errors import ParameterError
-from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
+from ..hybrid import Constraint, HybridModel, Phase, Section, Symbols, Transition
 from ..mechanics import (
     bodies_function,
     constrained_impact_velocity,
@@ -162,6 +162,35 @@ def _masses(sym: Symbols, geo: dict[str, ca.SX]) -> list[tuple[ca.SX, ca.SX]]:
 
 def _points(sym: Symbols, x: ca.SX, geo: dict[str, ca.SX]) -> ca.Function:
     return ca.Function("points", [x, sym.p], [ca.horzcat(*[geo[k] for k in POINT_NAMES])])
+
+
+def _contact_constraints(sym, x, geo, masses, q, qd, **where) -> tuple[Constraint, Constraint]:
+    """The unilateral conditions of a phase: the swing foot above the slope (its height above it:
+    the arc's lowest point; for R = 0 the foot; for curved feet the full circle's lowest point,
+    conservative for a foot that is only an arc of it), and a stance contact that pushes (the
+    ground's normal force ``N = n · Σ m_i (r̈_i + g ŷ) ≥ 0``).  ``where``: ``at_start`` (the
+    trailing foot starts on the slope and must lift off at once; one that does not would need a
+    double-support phase, not modelled) or ``at_end`` (touchdown at heel strike)."""
+    g = sym.gravity
+    clearance = sym.constraint(
+        "swing foot above the slope",
+        x,
+        ca.dot(geo["normal"], geo["swing_contact"]),
+        "trip",
+        unit="m",
+        source="a foot cannot enter the ground (McGeer 1990; Hsu Chen 2007, foot clearance)",
+        **where,
+    )
+    qdd = lagrange_acceleration(masses, q, qd, g)
+    push = sym.constraint(
+        "stance foot pushes on the slope",
+        x,
+        ca.dot(geo["normal"], contact_force(masses, q, qd, qdd, g)),
+        "stance foot lifts off",
+        unit="N",
+        source="a ground contact can only push (unilateral normal force)",
+    )
+    return clearance, push
 
 
 @dataclass(frozen=True)
@@ -297,31 +326,9 @@ class KneedWalker(HybridModel):
             doc="q2 − q3 rises through 0 (the flexed knee straightens); plastic impact locking "
             "the knee: M Δq̇ = Jᵀ Λ, q̇3⁺ = q̇2⁺",
         )
-        # Unilateral constraints (the physics of a foot and a ground contact).  The swing foot
-        # must clear the slope: its height above it (the arc's lowest point; for R = 0 the foot;
-        # for curved feet the full circle's lowest point, conservative for a foot that is only
-        # an arc of it).  It starts at 0 (the trailing foot is on the slope at heel strike), so
-        # it must rise at once: a foot that does not lift off is not this gait (it would need a
-        # double-support phase, not modelled).  The stance contact must push: the ground's
-        # normal force N = n · Σ m_i (r̈_i + g ŷ) ≥ 0.
-        clearance0 = sym.constraint(
-            "swing foot above the slope",
-            x0,
-            ca.dot(geo0["normal"], geo0["swing_contact"]),
-            "trip",
-            at_start=True,
-            unit="m",
-            source="a foot cannot enter the ground (McGeer 1990; Hsu Chen 2007, foot clearance)",
-        )
-        qdd0 = lagrange_acceleration(masses0, q, qd, g)
-        push0 = sym.constraint(
-            "stance foot pushes on the slope",
-            x0,
-            ca.dot(geo0["normal"], contact_force(masses0, q, qd, qdd0, g)),
-            "stance foot lifts off",
-            unit="N",
-            source="a ground contact can only push (unilateral normal force)",
-        )
+        # The swing foot clears the slope; it starts on it (the trailing foot at heel strike), so
+        # it must lift off at once (see _contact_constraints).
+        constraints0 = _contact_constraints(sym, x0, geo0, masses0, q, qd, at_start=True)
         fall0 = Transition(
             name="fall",
             guard=sym.function("guard", x0, ca.cos(q1)),
@@ -342,7 +349,7 @@ class KneedWalker(HybridModel):
             points=_points(sym, x0, geo0),
             point_names=POINT_NAMES,
             bodies=bodies_function(masses0, x0, q, qd, sym.p),
-            constraints=(clearance0, push0),
+            constraints=constraints0,
         )
 
         # -- phase 1: two-link swing (knee locked) -----------------------------------------------
@@ -371,25 +378,8 @@ class KneedWalker(HybridModel):
         )
         # With the knee locked the swing foot must still clear the slope until heel strike, where
         # its height returns to 0 (h = −2 (L − R) sin((q1 + q2)/2 − γ) sin((q1 − q2)/2): a leg
-        # whose knee locks before it passes the stance leg scuffs); the stance foot must push.
-        clearance1 = sym.constraint(
-            "swing foot above the slope",
-            x1,
-            ca.dot(geo1["normal"], geo1["swing_contact"]),
-            "trip",
-            at_end=True,
-            unit="m",
-            source="a foot cannot enter the ground (McGeer 1990; Hsu Chen 2007, foot clearance)",
-        )
-        qdd1 = lagrange_acceleration(masses1, r, rd, g)
-        push1 = sym.constraint(
-            "stance foot pushes on the slope",
-            x1,
-            ca.dot(geo1["normal"], contact_force(masses1, r, rd, qdd1, g)),
-            "stance foot lifts off",
-            unit="N",
-            source="a ground contact can only push (unilateral normal force)",
-        )
+        # whose knee locks before it passes the stance leg scuffs).
+        constraints1 = _contact_constraints(sym, x1, geo1, masses1, r, rd, at_end=True)
         fall1 = Transition(
             name="fall",
             guard=sym.function("guard", x1, ca.cos(p1)),
@@ -410,7 +400,7 @@ class KneedWalker(HybridModel):
             points=_points(sym, x1, geo1),
             point_names=POINT_NAMES,
             bodies=bodies_function(masses1, x1, r, rd, sym.p),
-            constraints=(clearance1, push1),
+            constraints=constraints1,
         )
 
         # -- section: just after heel strike ----------------------------------------------------
