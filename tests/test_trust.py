@@ -129,16 +129,20 @@ def test_compass_gait_at_a_small_slope_is_the_stable_long_step_gait():
     assert cycle.period == pytest.approx(0.69621651, abs=1e-7)
 
 
-def test_vanderpol_at_mu_5_is_found_from_the_default():
-    # Once a failure from the μ = 1 start.  Independent check: the nontrivial multiplier is
-    # exp(∮ −μ (q² − 1) dt) (Liouville), computed here by quadrature of the orbit's samples
-    # (Simpson on each arc's dense samples), 1e-6 relative.
-    cycle = gaitopt.find_limit_cycle(gaitopt.model("vanderpol", mu=5.0))
+@pytest.mark.parametrize("mu", [5.0, 10.0])
+def test_vanderpol_far_from_mu_1_is_found_from_the_default(mu):
+    # Once a failure from the μ = 1 start (and, for μ = 10, a mesh that stopped refining along
+    # the homotopy).  Independent check: the nontrivial multiplier is exp(∮ −μ (q² − 1) dt)
+    # (Liouville), by Simpson quadrature of the orbit's samples, 1e-6 relative; at μ = 10 the
+    # period is 19.078 s (the pseudo-arclength continuation's value, 1e-3 s).
+    cycle = gaitopt.find_limit_cycle(gaitopt.model("vanderpol", mu=mu))
     assert cycle.success and "homotopy" in cycle.route
     from scipy.integrate import simpson
 
-    integral = sum(simpson(-5.0 * (a.x[0] ** 2 - 1), x=a.t) for a in cycle.orbit)
+    integral = sum(simpson(-mu * (a.x[0] ** 2 - 1), x=a.t) for a in cycle.orbit)
     assert abs(cycle.multipliers[0]) == pytest.approx(math.exp(integral), rel=1e-6)
+    if mu == 10.0:
+        assert cycle.period == pytest.approx(19.078, abs=1e-3)
 
 
 def test_multi_start_finds_both_of_garcias_gaits_deterministically():
