@@ -306,6 +306,12 @@ class HybridModel:
     state_bounds: ClassVar[Mapping[str, tuple[float, float]]] = {}
     #: Longest a phase may last in simulation (s) before it counts as never ending.
     max_phase_time: ClassVar[float] = 30.0
+    #: Inputs that act only in a reset, as impulses (Kuo 2002's push-off just before heel
+    #: strike): the flow must not depend on them.  :func:`gaitopt.optimize_gait` makes each a
+    #: constant over a step (not a profile), leaves it out of the effort ``∫Σuᵢ² dt`` and adds
+    #: the work :meth:`impulse_work` says it does to the work-based costs.  Empty (default):
+    #: none; every input acts in the flow.
+    impulsive_inputs: ClassVar[tuple[str, ...]] = ()
     _cache: ClassVar[dict[type, _Structure]] = {}
 
     def __post_init__(self) -> None:
@@ -375,6 +381,15 @@ class HybridModel:
         torque, m/s for a force) such that input ``i`` delivers the power ``uᵢ ωᵢ`` (W) — for a
         joint torque, the relative rate of the two bodies it acts between.  ``None`` (the
         default): the model does not declare them, and work-based costs are unavailable."""
+        del phase
+        return None
+
+    def impulse_work(self, phase: int) -> ca.Function | None:
+        """The positive work the :attr:`impulsive_inputs` do in the cycle transition of
+        ``phase`` (``transitions[0]``): ``work(x⁻, u, p) -> w`` with one entry per impulsive
+        input, in the model's energy unit (J; ``m·g·l`` for a dimensionless model), ``x⁻`` the
+        state just before the transition.  ``None`` (the default): no impulsive input acts
+        there."""
         del phase
         return None
 

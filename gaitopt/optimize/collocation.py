@@ -313,6 +313,11 @@ class Collocation:
                     for _ in range(arc.intervals)
                 ]
             Xc = Xk[:, 1:]
+            for r in problem.impulsive_index:  # an impulse: one value per step, held
+                if ulo[r] == uhi[r]:  # switched off by its bounds: already constant
+                    continue
+                name = model.inputs[r]
+                add(f"impulse '{name}' held over {label}", Uk[r, :-1] - Uk[r, -1])
             if self.implicit is None:
                 F = phase.flow.map(N * d)(Xc, Uk, p)
             else:  # ẋ = (q̇, a) with M(q) a = rhs(q, q̇, u) as constraints
@@ -380,6 +385,7 @@ class Collocation:
                 power = Uk * rates
                 add(f"power split ({label})", Pp[k] - Pm[k] - power)
                 work_terms.append(hq * ca.mtimes(ca.sum1(Pp[k]), wq))
+                work_terms.append(problem.impulse_work(i, x_end, u_end, p))
                 effort_terms.append(hq * ca.mtimes(ca.sum1(Uk**2), wq))
             elif work:  # signed arcs: σ uᵢωᵢ ≥ 0 on each arc, cost Σ_{σ=+} uᵢωᵢ (exact)
                 rate_fn = model.input_rates(i)
@@ -410,6 +416,7 @@ class Collocation:
                         add(name, us[r, :], ulo[r], uhi[r])
                 positive = ca.DM(np.repeat((signs > 0).astype(float), d, axis=1))
                 work_terms.append(ca.mtimes(ca.sum1(positive * power), wq))
+                work_terms.append(problem.impulse_work(i, x_end, u_end, p))
             else:
                 L = ca.vertcat(*[problem.integrand(i, Xc[:, c], Uk[:, c], p) for c in range(N * d)])
                 cost_terms.append(hq * ca.mtimes(L.T, wq))

@@ -22,6 +22,12 @@ Costs (all integrated over the whole orbit, ``t ∈ [0, period]``):
   distance the sum of the step lengths;
 * a callable ``cost(x, u, p) -> scalar`` of CasADi symbols: the integrand, user's units.
 
+Impulsive inputs (:attr:`gaitopt.HybridModel.impulsive_inputs`, Kuo's push-off) act only in a
+reset: each is one value per step (held constant over the step's profile), left out of the effort,
+and its work (:meth:`gaitopt.HybridModel.impulse_work`, positive) is added to the positive work
+of the work-based costs; it needs no bound (its work grows with its size).  A bound of 0
+(``bounds={"push_off": 0}``) switches an input off.
+
 Step length is the distance between the feet at heel strike: the norm of the new foothold (the
 phase point named by the cycle transition's ``foothold``, positions relative to the stance foot)
 at the end of the phase.  Speed is the total step length over the period.
@@ -49,6 +55,25 @@ _UNITS = {"effort": "N^2*m^2*s", "work": "J", "cot": "1"}
 def cost_unit(kind: str) -> str:
     """Unit of a named cost (``"effort"``: N²·m²·s for torques)."""
     return _UNITS.get(kind, "user units")
+
+
+def _bound_pair(name: str, value: Any) -> tuple[float, float]:
+    """``bounds[name]`` as ``(low, high)``: a number ``b >= 0`` means ``(−b, b)``."""
+    try:
+        if isinstance(value, (tuple, list)):
+            low, high = (float(v) for v in value)
+        else:
+            high = float(value)
+            low = -high
+    except (TypeError, ValueError):
+        low = high = math.nan
+    if not (math.isfinite(low) and math.isfinite(high) and low <= high):
+        raise GaitoptInputError(
+            f"`bounds[{name!r}]` must be a finite number >= 0 (|u| <= it; 0 switches the input "
+            f"off) or a pair (low, high) with low <= high, got {value!r}; e.g. "
+            f"bounds={{{name!r}: 20}} or bounds={{{name!r}: (0, 20)}}"
+        )
+    return low, high
 
 
 def _positive(name: str, value: Any, *, allow_none: bool = True) -> float | None:
@@ -81,8 +106,10 @@ class GaitProblem:
         Distance between the feet at heel strike, averaged over the steps (m); ``None``: free.
     speed : float or None
         Total step length over the period (m/s); ``None``: free.
-    bounds : mapping of str to float
-        ``{input: max}``: ``|u_input| ≤ max`` (input units) at every collocation point.
+    bounds : mapping of str to float or (float, float)
+        ``{input: max}``: ``|u_input| ≤ max``, or ``{input: (low, high)}``: ``low ≤ u_input ≤
+        high`` (input units) at every collocation point, within the model's own
+        :attr:`~gaitopt.HybridModel.input_bounds`; 0 switches the input off.
     state_bounds : mapping of str to (float, float)
         ``{state: (low, high)}`` at every node (joint limits, rate limits; state units).
     free : tuple of str
@@ -133,7 +160,11 @@ class GaitProblem:
                     f"{self.cost!r}; {did_you_mean(self.cost, COSTS)}e.g. cost='effort'"
                 )
             if self.cost in ("work", "cot"):
-                unbounded = [n for n in model.inputs if n not in dict(self.bounds)]
+                unbounded = [
+                    n
+                    for n in model.inputs
+                    if n not in dict(self.bounds) and n not in model.impulsive_inputs
+                ]
                 if unbounded:
                     raise GaitoptInputError(
                         f"`cost` {self.cost!r} needs a bound on every input (positive work has "
@@ -168,7 +199,7 @@ class GaitProblem:
                     f"`bounds` names unknown input {name!r}; {did_you_mean(name, model.inputs)}"
                     f"{model.name}'s inputs: {', '.join(model.inputs)}"
                 )
-            _positive(f"bounds[{name!r}]", value, allow_none=False)
+            _bound_pair(name, value)
         states = model.state_names
         for name, pair in dict(self.state_bounds).items():
             if name not in states:
@@ -227,9 +258,41 @@ class GaitProblem:
         return np.array(low), np.array(high)
 
     def input_bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(low, high)`` of the inputs (``±inf`` where unbounded)."""
-        high = np.array([float(self.bounds.get(n, np.inf)) for n in self.model.inputs])
-        return -high, high
+        """``(low, high)`` of the inputs: ``|u| ≤ bounds[input]`` within the model's declared
+        :attr:`~gaitopt.HybridModel.input_bounds` (``±inf`` where unbounded)."""
+        model = self.model
+        pairs = [
+            _bound_pair(n, self.bounds[n]) if n in self.bounds else (-np.inf, np.inf)
+            for n in model.inputs
+        ]
+        low = np.array([a for a, _ in pairs], dtype=float)
+        high = np.array([b for _, b in pairs], dtype=float)
+        declared = dict(model.input_bounds)
+        for j, name in enumerate(model.inputs):
+            if name in declared:
+                low[j] = max(low[j], float(declared[name][0]))
+                high[j] = min(high[j], float(declared[name][1]))
+        return low, high
+
+    @property
+    def impulsive_index(self) -> list[int]:
+        """Positions in ``u`` of the model's impulsive inputs (acting only in resets)."""
+        return [self.model.inputs.index(n) for n in self.model.impulsive_inputs]
+
+    @property
+    def flow_index(self) -> list[int]:
+        """Positions in ``u`` of the inputs that act in the flow (profiles)."""
+        impulsive = set(self.impulsive_index)
+        return [j for j in range(len(self.model.inputs)) if j not in impulsive]
+
+    def impulse_work(self, phase: int, x: Any, u: Any, p: Any) -> Any:
+        """Work of the impulsive inputs in the cycle transition of ``phase`` from the
+        pre-transition state ``x`` (model energy unit); 0 where none acts."""
+        work = self.model.impulse_work(phase) if self.model.impulsive_inputs else None
+        if work is None:
+            return 0.0
+        value = ca.sum1(work(x, u, p))
+        return value if isinstance(x, (ca.MX, ca.SX)) else float(value)
 
     def state_bounds_of(self, phase: int) -> tuple[np.ndarray, np.ndarray]:
         """``(low, high)`` of the states of ``phase`` (by name; ``±inf`` where unbounded)."""
@@ -286,8 +349,9 @@ class GaitProblem:
 
     def integrand(self, phase: int, x: Any, u: Any, p: Any) -> Any:
         """Running cost of a smooth cost at one point (effort or custom; work uses slacks)."""
-        if self.cost == "effort":
-            return ca.sumsqr(u)
+        if self.cost == "effort":  # the inputs acting in the flow (not the impulses)
+            flow = self.flow_index
+            return ca.sumsqr(u) if len(flow) == u.shape[0] else ca.sumsqr(u[flow])
         if callable(self.cost):
             value = self.cost(x, u, p)
             return value if not isinstance(value, (int, float)) else ca.MX(value)
@@ -305,7 +369,10 @@ class GaitProblem:
             "period": self.period,
             "step_length": self.step_length,
             "speed": self.speed,
-            "bounds": dict(self.bounds),
+            "bounds": {
+                k: (list(v) if isinstance(v, (tuple, list)) else v)
+                for k, v in dict(self.bounds).items()
+            },
             "state_bounds": {k: list(v) for k, v in dict(self.state_bounds).items()},
             "free": list(self.free),
             "steps": self.steps,

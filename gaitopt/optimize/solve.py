@@ -49,7 +49,7 @@ _IPOPT = {
     "error_on_fail": False,
     "expand": True,
 }
-_SOLVERS: dict[int, ca.Function] = {}
+_SOLVERS: dict[int, tuple[Collocation, ca.Function]] = {}
 _MAX_REFINEMENTS = 3
 _ARC_INTERVALS = 2  # mesh intervals per arc of the switching-time transcription, before refinement
 
@@ -149,10 +149,11 @@ def _start_indices(starts: int | Sequence[int]) -> list[int]:
 
 def _solver(col: Collocation) -> ca.Function:
     key = id(col)
-    if key not in _SOLVERS:
+    entry = _SOLVERS.get(key)
+    if entry is None or entry[0] is not col:  # an id may be reused once its object is freed
         _SOLVERS.clear()  # one at a time: each holds a compiled NLP
-        _SOLVERS[key] = ca.nlpsol("gait", "ipopt", col.nlp, _IPOPT)
-    return _SOLVERS[key]
+        _SOLVERS[key] = (col, ca.nlpsol("gait", "ipopt", col.nlp, _IPOPT))
+    return _SOLVERS[key][1]
 
 
 def _run(col: Collocation, w0: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, dict[str, Any]]:
@@ -191,15 +192,18 @@ def _active(col: Collocation, w: np.ndarray, p: np.ndarray) -> list[str]:
             out.append(group.name)
     B = col.blocks
     names = problem.model.inputs
+    lows, highs = problem.input_bounds()
     for k in range(len(col.chain)):
         U = B.get(w, f"U{k}")
         for i, name in enumerate(names):
-            high = problem.bounds.get(name)
-            if high is not None:
-                count = int(np.sum(np.abs(U[i]) > high * (1 - 1e-6)))
-                label = f"|{name}| <= {high:g}"
-                if count and label not in out:
-                    out.append(label)
+            low, high = lows[i], highs[i]
+            if name not in problem.bounds or high <= low:  # unbounded, or switched off
+                continue
+            tol = 1e-6 * max(abs(low), abs(high))
+            count = int(np.sum(U[i] > high - tol) + np.sum(U[i] < low + tol))
+            label = f"|{name}| <= {high:g}" if low == -high else f"{low:g} <= {name} <= {high:g}"
+            if count and label not in out:
+                out.append(label)
         phase = problem.model.phases[col.chain[k]]
         X = B.get(w, f"X{k}")
         for j, state in enumerate(phase.states):
@@ -247,7 +251,9 @@ def _guess_from_simulation(
         target = problem.step_length * problem.steps / problem.speed
     if target is not None:
         durations = durations * target / durations.sum()
-    amplitude = np.array([min(problem.bounds.get(n, 1.0), 1.0) for n in model.inputs])
+    low, high = problem.input_bounds()
+    reach = np.maximum(np.abs(low), np.abs(high))
+    amplitude = np.minimum(np.where(np.isfinite(reach), reach, 1.0), 1.0)
     phases_ = rng.uniform(0, 2 * np.pi, n_u) if rng is not None else np.zeros(n_u)
     scale = 0.5 * amplitude if rng is not None else np.zeros(n_u)
 
@@ -509,7 +515,7 @@ def detect_structure(
                 arcs.append((switch - start, signs(current)))
                 start, current = switch, classes[c]
         arcs.append((1.0 - start, signs(current)))
-        per_phase.append(arcs)
+        per_phase.append(_merge_blips(arcs, 1.0 / col.N))
     most = max(len(a) for a in per_phase)
     total = intervals * most
     structure = []
@@ -522,6 +528,43 @@ def detect_structure(
             [Arc(n, signs, max(f, 1e-3)) for n, (f, signs) in zip(counts, arcs, strict=True)]
         )
     return structure
+
+
+def _merge_blips(
+    arcs: list[tuple[float, tuple[int, ...]]], shortest: float
+) -> list[tuple[float, tuple[int, ...]]]:
+    """Arcs without blips: an arc shorter than ``shortest`` (a fraction of the phase) between
+    two arcs of the same signs, or next to an arc of its own signs, is merged with them — a
+    node or two where the input passes between classes at a switch, or noise where the cost is
+    flat (a coasting arc), not a switch of the optimum's own; then neighbours of the same signs
+    are joined (the transcription treats them alike, so a switch between them would be a free
+    variable the cost does not fix)."""
+    arcs = list(arcs)
+    changed = True
+    while changed and len(arcs) >= 2:
+        changed = False
+        for j, (f, signs) in enumerate(arcs):
+            if f >= shortest:
+                continue
+            before = arcs[j - 1][1] if j > 0 else None
+            after = arcs[j + 1][1] if j + 1 < len(arcs) else None
+            if before is not None and before == after:
+                lo, hi, signs = j - 1, j + 1, before
+            else:
+                lo = j - 1 if before == signs else j
+                hi = j + 1 if after == signs else j
+            if lo == hi:
+                continue
+            arcs[lo : hi + 1] = [(sum(a[0] for a in arcs[lo : hi + 1]), signs)]
+            changed = True
+            break
+    joined: list[tuple[float, tuple[int, ...]]] = []
+    for f, signs in arcs:
+        if joined and joined[-1][1] == signs:
+            joined[-1] = (joined[-1][0] + f, signs)
+        else:
+            joined.append((f, signs))
+    return joined
 
 
 def _certify(

@@ -111,8 +111,9 @@ def simulate_gait(
 def _integrand(problem: GaitProblem, phase: int) -> Callable[[np.ndarray, np.ndarray, Any], float]:
     kind = problem.cost_kind
     model = problem.model
-    if kind == "effort":
-        return lambda x, u, p: float(np.dot(u, u))
+    if kind == "effort":  # the inputs acting in the flow (not the impulses)
+        flow = problem.flow_index
+        return lambda x, u, p: float(np.dot(u[flow], u[flow]))
     if kind in ("work", "cot"):
         rates = model.input_rates(phase)
         return lambda x, u, p: float(
@@ -147,6 +148,17 @@ def simulated_cost(problem: GaitProblem, model: Any, sim: Simulation, profs: lis
             for tt, xx, ww in zip(ts, xs.T, weights, strict=True):
                 u = profs[step % len(profs)](tt - t_sec)
                 total += (b - a) / 2 * ww * f(xx, u, p)
+    if problem.cost_kind in ("work", "cot") and model.impulsive_inputs:
+        # The impulses' work at each cycle transition, with the input the reset saw.
+        for event in sim.events:
+            if (
+                event.state_after is None
+                or event.transition != model.phases[event.phase].transitions[0].name
+            ):
+                continue
+            step = max(int(np.searchsorted(section_times, event.t, side="left")) - 1, 0)
+            u = profs[step % len(profs)](event.t - section_times[step])
+            total += problem.impulse_work(event.phase, event.state_before, u, p)
     if problem.cost_kind == "cot":
         for event in sim.events:
             if event.state_after is None:
