@@ -5,9 +5,15 @@ world-frame points relative to the current contact point; the model's
 :attr:`~gaitopt.hybrid.HybridModel.drawing` lists the polylines to draw through them (default:
 one polyline through every point), and :meth:`~gaitopt.hybrid.HybridModel.outline` draws shapes
 the points cannot say (the rimless wheel's spokes, the kneed walker's curved feet).  A dot marks
-the body mass (the point named ``hip``, ``hub``, ``mass``, ``body``, ``axle`` or ``com``).  At
-each transition with a ``foothold`` the contact point moves to that point's world position at
-the event, so successive steps walk on.
+the body mass (the point named ``hip``, ``hub``, ``mass``, ``body``, ``axle`` or ``com``) or the
+ball (``ball``).  At each transition with a ``foothold`` the contact point moves to that point's
+world position at the event, so successive steps walk on.
+
+A walker or hopper stands on the ground, drawn as the line ``y = −x·tan(slope)`` through the first
+contact; a scene without ground (a ball on a vibrating table, a juggler's paddle) says so with the
+class attribute ``on_ground = False``, and is drawn without it, its view filling the frame.  Such
+a scene's GIF is named ``animation.gif`` by ``make gaits`` (:func:`gif_name`), a walker's
+``walking.gif``.
 """
 
 from __future__ import annotations
@@ -25,9 +31,21 @@ from .files import replaced_atomically
 from .hybrid import HybridModel, Phase
 from .simulation import Simulation
 
-__all__ = ["animate_walker", "walker_frames"]
+__all__ = ["animate_walker", "walker_frames", "on_ground", "gif_name"]
 
-_MASS_POINTS = ("hip", "hub", "mass", "body", "axle", "com")
+_MASS_POINTS = ("hip", "hub", "mass", "body", "axle", "com", "ball")
+
+
+def on_ground(model: HybridModel) -> bool:
+    """Whether ``model``'s scene stands on the ground (its class attribute ``on_ground``,
+    default True): False for a ball on a table or a juggler's paddle, drawn without a ground."""
+    return bool(getattr(type(model), "on_ground", True))
+
+
+def gif_name(model: HybridModel) -> str:
+    """File name of ``model``'s animation: ``walking.gif`` for a scene on the ground (walkers,
+    hoppers), ``animation.gif`` for one without (the bouncing ball, the jugglers)."""
+    return "walking.gif" if on_ground(model) else "animation.gif"
 
 
 def kneed_outline(model: HybridModel, phase: Phase, x: np.ndarray, pts: np.ndarray) -> np.ndarray:
@@ -213,16 +231,27 @@ def animate_walker(
     pad = 0.12 * max(xmax - xmin, ymax - ymin)
     xmin, xmax, ymin, ymax = xmin - pad, xmax + pad, ymin - pad, ymax + pad
     slope = float(getattr(model, "slope", 0.0))
+    ground = on_ground(model)
+    if not ground:
+        # A scene without ground is tall and narrow (a ball above its paddle): widen the view to
+        # about the axes' shape in the 6 × 3.2 in frame (height/width ≈ 0.45) rather than leave
+        # the axes a thin strip.
+        width = max(xmax - xmin, (ymax - ymin) / 0.45)
+        xmid = 0.5 * (xmin + xmax)
+        xmin, xmax = xmid - 0.5 * width, xmid + 0.5 * width
 
     fig, ax = plt.subplots(figsize=(6.0, 3.2), layout="constrained")
-    ax.set_xlabel("distance along the ground x (m)", fontsize=8)
+    if ground:
+        ax.set_xlabel("distance along the ground x (m)", fontsize=8)
+        ground_x = np.array([xmin - 1.0, xmax + 1.0])
+        ground_y = -ground_x * math.tan(slope)
+        ax.fill_between(ground_x, ground_y, ymin - 10.0, color="0.85", zorder=0)
+        ax.plot(ground_x, ground_y, color="0.3", lw=1.2, zorder=1)
+    else:
+        ax.set_xlabel("horizontal position x (m)", fontsize=8)
     ax.set_ylabel("height y (m)", fontsize=8)
-    ground_x = np.array([xmin - 1.0, xmax + 1.0])
-    ground_y = -ground_x * math.tan(slope)
-    ax.fill_between(ground_x, ground_y, ymin - 10.0, color="0.85", zorder=0)
-    ax.plot(ground_x, ground_y, color="0.3", lw=1.2, zorder=1)
     (body,) = ax.plot([], [], color="C0", lw=3, solid_capstyle="round", zorder=3)
-    (mass,) = ax.plot([], [], "o", color="C3", ms=9, zorder=4)
+    (mass,) = ax.plot([], [], "o", color="C3", ms=9 if ground else 7, zorder=4)
     (steps,) = ax.plot([], [], "^", color="k", ms=4, zorder=2)
     clock = ax.text(0.02, 0.95, "", transform=ax.transAxes, va="top", fontsize=9)
     ax.set_xlim(xmin, xmax)
@@ -230,18 +259,27 @@ def animate_walker(
     ax.set_aspect("equal")
     ax.tick_params(labelsize=7)
     pace = "real time" if speed == 1.0 else f"{speed:.2g}× real time"
-    where = f"slope {slope:.3g} rad" if slope else "level ground"
-    ax.set_title(f"{model.title or model.name}, {where}; {pace}", fontsize=10)
+    if ground:
+        where = f"slope {slope:.3g} rad" if slope else "level ground"
+        ax.set_title(f"{model.title or model.name}, {where}; {pace}", fontsize=10)
+    else:
+        ax.set_title(f"{model.title or model.name}; {pace}", fontsize=10)
 
     def draw(k: int):
         frame = frames[k]
         body.set_data(frame["outline"][0], frame["outline"][1])
         mass.set_data(frame["mass"][0], frame["mass"][1])
-        contacts = np.unique(np.array([f["contact"] for f in frames[: k + 1]]), axis=0)
-        steps.set_data(contacts[:, 0], contacts[:, 1])
+        if ground:  # footholds; a scene without ground has none to mark
+            contacts = np.unique(np.array([f["contact"] for f in frames[: k + 1]]), axis=0)
+            steps.set_data(contacts[:, 0], contacts[:, 1])
         clock.set_text(f"t = {times[k]:.2f} {'s' if model.time_unit == 's' else '(dimensionless)'}")
         return body, mass, steps, clock
 
+    # Lay the figure out once (every frame has the same labels and ticks), then freeze it: a
+    # constrained layout redone for each frame measures all its text again (most of the time).
+    draw(0)
+    fig.canvas.draw()
+    fig.set_layout_engine("none")
     animation = FuncAnimation(fig, draw, frames=len(frames), blit=False)
     try:
         with replaced_atomically(path, ".gif") as tmp:  # Pillow picks the format from the suffix

@@ -12,7 +12,9 @@ from the model's default start and write, under ``OUT/<model>/``,
   that rerunning leaves the tracked files unchanged (timings are measured by ``make bench``);
 * ``phase_portrait.png`` — the orbit's phase portrait with a simulated transient from the
   model's default start;
-* ``walking.gif`` — for models with a drawable geometry, ~4 simulated steps from the fixed point;
+* ``walking.gif`` — for models with a drawable geometry, ~4 simulated steps from the fixed point
+  (``animation.gif`` for a scene without ground: the bouncing ball, the jugglers;
+  :func:`gaitopt.animation.gif_name`);
 * ``return_map.png`` — for 1-D sections, the staircase plot of the return map (the rimless
   wheel's closed-form map overlaid).
 
@@ -51,7 +53,7 @@ __all__ = ["main", "run_model", "return_map_interval"]
 
 WALK_STEPS = 4  # simulated steps in walking.gif
 TRANSIENT_STEPS = 8  # simulated steps overlaid on the phase portrait
-FIGURES = ("phase_portrait.png", "return_map.png", "walking.gif")
+FIGURES = ("phase_portrait.png", "return_map.png", "walking.gif", "animation.gif")
 
 
 def return_map_interval(cycle: LimitCycle) -> tuple[float, float]:
@@ -127,7 +129,7 @@ def run_model(name: str, out: Path) -> tuple[LimitCycle, list[str], list[str]]:
     if len(model.section.coordinates) == 1:
         attempt("return_map.png", staircase)
     if _drawable(model):
-        attempt("walking.gif", walking)
+        attempt(animation.gif_name(model), walking)
     return cycle, written, errors
 
 

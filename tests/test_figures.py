@@ -21,7 +21,7 @@ import pytest  # noqa: E402
 from PIL import Image  # noqa: E402
 
 import gaitopt  # noqa: E402
-from gaitopt.animation import animate_walker, walker_frames  # noqa: E402
+from gaitopt.animation import animate_walker, gif_name, walker_frames  # noqa: E402
 from gaitopt.errors import GaitoptInputError  # noqa: E402
 from gaitopt.files import write_json  # noqa: E402
 from gaitopt.gaits import main as gaits_main  # noqa: E402
@@ -353,3 +353,45 @@ def test_gifs_are_readable_and_draw_only_declared_lines(tmp_path):
     path = animate_walker(model, sim, tmp_path / "hop.gif", fps=10, max_frames=3)
     with Image.open(path) as im:
         assert im.size[0] > 420 and im.size[1] > 224  # larger than the old 420×224
+
+
+# -- the ball-and-paddle scenes: the bouncing ball and the jugglers --------------------------------
+def _gap_drawn(frame: dict) -> float:
+    """Signed distance (m) of the drawn ball from the line through the first two drawn points
+    (the table's or paddle's bar), positive on its left: above a bar drawn left to right."""
+    p0, p1 = frame["outline"][:, 0], frame["outline"][:, 1]
+    d = (p1 - p0) / np.hypot(*(p1 - p0))
+    ball = frame["mass"][:, 0] - p0
+    return float(d[0] * ball[1] - d[1] * ball[0])
+
+
+@pytest.mark.parametrize("name", ["bouncing_ball", "line_juggler", "planar_juggler"])
+def test_ball_scenes_render_and_draw_the_ball_above_its_paddle(name, cycles, tmp_path):
+    # The drawing against the model's own declared constraint "ball above the table/paddle"
+    # (y − A sin(phase); b (1 + κ) with r = −κ b; n·(x, y) for the tilted paddle): on every frame
+    # of two simulated bounces from the gait, the drawn ball's distance from the drawn bar equals
+    # the constraint to 1e-9 m (both are the same closed form, to rounding) and is ≥ 0.
+    cycle = cycles[name]
+    assert cycle.success, cycle.message
+    model = cycle.model
+    sim = gaitopt.simulate(model, cycle.x, steps=2, inputs=cycle.inputs)
+    assert sim.success and len(sim.arcs) == 2, sim.message
+    (phase,) = model.phases
+    (above,) = phase.constraints
+    assert above.name.startswith("ball above")
+    ends = np.array([arc.t1 for arc in sim.arcs])
+    times = np.linspace(sim.arcs[0].t0, sim.arcs[-1].t1, 301)  # impacts included (gap 0)
+    for t, frame in zip(times, walker_frames(model, sim, times), strict=True):
+        arc = sim.arcs[min(int(np.searchsorted(ends, t, side="left")), len(sim.arcs) - 1)]
+        x = np.asarray(arc.solution(min(max(t, arc.t0), arc.t1)), dtype=float).ravel()
+        c = float(above.function(x, cycle.inputs, model.p))
+        gap = _gap_drawn(frame)
+        assert gap == pytest.approx(c, abs=1e-9)
+        assert gap >= -1e-9, (t, gap)
+    assert max(_gap_drawn(f) for f in walker_frames(model, sim, times)) > 0.04  # it flies
+    # The animation renders (no ground under these scenes: `make gaits` names it animation.gif).
+    path = animate_walker(model, sim, tmp_path / "scene.gif", fps=10, max_frames=3, dpi=30)
+    with Image.open(path) as im:
+        assert im.format == "GIF" and im.n_frames == 3
+    assert gif_name(model) == "animation.gif"
+    assert gif_name(gaitopt.model("compass_gait")) == "walking.gif"

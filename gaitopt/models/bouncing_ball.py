@@ -55,6 +55,8 @@ from ..parameters import parameter
 __all__ = ["BouncingBall"]
 
 _HOLMES = "Holmes 1982; Guckenheimer & Holmes §2.4"
+#: Half-width (m) of the drawn table (drawing only: the model's ball and table are on one line).
+TABLE_HALF_WIDTH = 0.03
 
 
 @dataclass(frozen=True)
@@ -67,6 +69,10 @@ class BouncingBall(HybridModel):
     title = "Ball bouncing on a vibrating table"
     reference = "Holmes 1982; Guckenheimer & Holmes 1983, §2.4"
     mesh = (4, 4)
+    #: The drawing: the table's top (a bar at height s = A sin(phase)) and the ball (a dot).
+    drawing = (("table_left", "table_right"),)
+    #: No ground under the scene: the table is the only support (see :mod:`gaitopt.animation`).
+    on_ground: ClassVar[bool] = False
     #: A flight lasts a few table periods at most (0.2 s each at the defaults).
     max_phase_time: ClassVar[float] = 5.0
 
@@ -147,12 +153,28 @@ class BouncingBall(HybridModel):
             unit="m",
             source="the table is solid (Holmes 1982)",
         )
+        # Drawing points (m): the table's top at s = A sin(phase), the ball at height y; so the
+        # drawn gap between them is the constraint's y − A sin(phase).
+        table = amp * ca.sin(phase)
+        points = ca.Function(
+            "points",
+            [x, sym.p],
+            [
+                ca.horzcat(
+                    ca.vertcat(-TABLE_HALF_WIDTH, table),
+                    ca.vertcat(TABLE_HALF_WIDTH, table),
+                    ca.vertcat(0, y),
+                )
+            ],
+        )
         flight = Phase(
             "flight",
             ("phase", "y", "y_dot"),
             flow,
             (impact,),
             {"energy": energy},
+            points=points,
+            point_names=("table_left", "table_right", "ball"),
             constraints=(above,),
         )
         s = ca.SX.sym("s", 2)

@@ -52,6 +52,8 @@ __all__ = ["LineJuggler"]
 _BUEHLER = "Buehler, Koditschek & Kindlmann 1990"
 #: The ball counts as dropped this far (m) below the mirror point.
 DROP_DEPTH = 1.0
+#: Half-width (m) of the drawn paddle (drawing only: ball and paddle move on one vertical line).
+PADDLE_HALF_WIDTH = 0.1
 
 
 @dataclass(frozen=True)
@@ -66,6 +68,10 @@ class LineJuggler(HybridModel):
     reference = "Buehler, Koditschek & Kindlmann 1990; Tedrake, Underactuated Robotics"
     mesh = (4, 4)
     max_phase_time: ClassVar[float] = 10.0
+    #: The drawing: the paddle (a bar at height r = −κ b) and the ball (a dot).
+    drawing = (("paddle_left", "paddle_right"),)
+    #: No ground under the scene (see :mod:`gaitopt.animation`).
+    on_ground: ClassVar[bool] = False
 
     restitution: float = parameter(
         0.8,
@@ -147,12 +153,28 @@ class LineJuggler(HybridModel):
             unit="m",
             source="the paddle is solid (Buehler et al. 1990)",
         )
+        # Drawing points (m, heights above the mirror point): the paddle at the mirror law's
+        # r = −κ b and the ball at b; the drawn gap b − r is the constraint's b (1 + κ).
+        paddle = -k * b
+        points = ca.Function(
+            "points",
+            [x, sym.p],
+            [
+                ca.horzcat(
+                    ca.vertcat(-PADDLE_HALF_WIDTH, paddle),
+                    ca.vertcat(PADDLE_HALF_WIDTH, paddle),
+                    ca.vertcat(0, b),
+                )
+            ],
+        )
         flight = Phase(
             "flight",
             ("b", "v", "b_dot"),
             flow,
             (impact, dropped),
             {"energy": energy},
+            points=points,
+            point_names=("paddle_left", "paddle_right", "ball"),
             constraints=(above,),
         )
         s = ca.SX.sym("s", 1)

@@ -84,6 +84,9 @@ __all__ = ["PlanarJuggler"]
 #: The ball counts as dropped this far (m) below the pivot.
 DROP_DEPTH = 1.0
 STATES = ("x", "y", "x_dot", "y_dot", "x_dot_pre", "energy_pre")
+#: Drawn paddle, in units of x̄ along the bar from the pivot (drawing only): a short stub behind
+#: the pivot and the arm to twice the desired impact point.
+PADDLE_REACH = (-0.2, 2.0)
 
 
 @dataclass(frozen=True)
@@ -105,6 +108,11 @@ class PlanarJuggler(HybridModel):
     reference = "Buehler, Koditschek & Kindlmann 1990"
     mesh = (4, 4)
     max_phase_time: ClassVar[float] = 10.0
+    #: The drawing: the paddle (a bar through the pivot at the mirror law's angle θ) and the
+    #: ball (a dot).
+    drawing = (("paddle_back", "pivot", "paddle_tip"),)
+    #: No ground under the scene (see :mod:`gaitopt.animation`).
+    on_ground: ClassVar[bool] = False
 
     restitution: float = parameter(
         0.8,
@@ -245,12 +253,29 @@ class PlanarJuggler(HybridModel):
             unit="m",
             source="the paddle is solid (Buehler et al. 1994)",
         )
+        # Drawing points (m, pivot at the origin): the paddle along t = (cos θ, sin θ) and the
+        # ball; the ball's drawn distance from the paddle line is the constraint's n·(x, y).
+        along = ca.vertcat(ca.cos(theta), ca.sin(theta))
+        points = ca.Function(
+            "points",
+            [xs, sym.p],
+            [
+                ca.horzcat(
+                    PADDLE_REACH[0] * xbar * along,
+                    ca.DM.zeros(2, 1),
+                    PADDLE_REACH[1] * xbar * along,
+                    ca.vertcat(x, y),
+                )
+            ],
+        )
         flight = Phase(
             "flight",
             STATES,
             flow,
             (hit, dropped, over),
             {"energy": sym.conserved("energy", xs, energy(y, vx, vy))},
+            points=points,
+            point_names=("paddle_back", "pivot", "paddle_tip", "ball"),
             constraints=(above,),
         )
 
