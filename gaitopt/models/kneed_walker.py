@@ -59,6 +59,15 @@ rises at 0.28 m/s just after heel strike and the knee flexes at once (the tests 
 stays flexed through the three-link phase); ``problems/kneed_walker_feet.py`` counts perturbed
 states that violate either as failures.
 
+**Inputs** (zero by default: the passive walker, unchanged): ``hip_torque`` τ_h (N·m) between the
+stance leg and the swing thigh, +τ_h on the thigh and −τ_h on the stance leg (the compass gait's
+``B = [−1, 1]ᵀ``); ``knee_torque`` τ_k (N·m) between the swing thigh and shank, +τ_k on the shank
+(flexing the knee, raising ``q3 − q2``) and −τ_k on the thigh.  Generalised forces
+``Q = (−τ_h, τ_h − τ_k, τ_k)`` in the three-link phase and ``(−τ_h, τ_h)`` with the knee
+locked, where the knee torque acts on a latched joint and does nothing.  The stance push uses
+the actuated accelerations.  Powers: ``τ_h (q̇2 − q̇1)`` and ``τ_k (q̇3 − q̇2)`` (0 with the
+knee locked).
+
 **Section:** just after heel strike, ``q2 = q3 = 2γ − q1`` and ``q̇3 = q̇2``; free coordinates
 ``q1, q1_dot, q2_dot`` (3 nontrivial multipliers).
 """
@@ -164,13 +173,16 @@ def _points(sym: Symbols, x: ca.SX, geo: dict[str, ca.SX]) -> ca.Function:
     return ca.Function("points", [x, sym.p], [ca.horzcat(*[geo[k] for k in POINT_NAMES])])
 
 
-def _contact_constraints(sym, x, geo, masses, q, qd, **where) -> tuple[Constraint, Constraint]:
+def _contact_constraints(
+    sym, x, geo, masses, q, qd, tau=0, **where
+) -> tuple[Constraint, Constraint]:
     """The unilateral conditions of a phase: the swing foot above the slope (its height above it:
     the arc's lowest point; for R = 0 the foot; for curved feet the full circle's lowest point,
     conservative for a foot that is only an arc of it), and a stance contact that pushes (the
     ground's normal force ``N = n · Σ m_i (r̈_i + g ŷ) ≥ 0``).  ``where``: ``at_start`` (the
     trailing foot starts on the slope and must lift off at once; one that does not would need a
-    double-support phase, not modelled) or ``at_end`` (touchdown at heel strike)."""
+    double-support phase, not modelled) or ``at_end`` (touchdown at heel strike); ``tau``: the
+    generalised forces of the joint torques."""
     g = sym.gravity
     clearance = sym.constraint(
         "swing foot above the slope",
@@ -181,7 +193,7 @@ def _contact_constraints(sym, x, geo, masses, q, qd, **where) -> tuple[Constrain
         source="a foot cannot enter the ground (McGeer 1990; Hsu Chen 2007, foot clearance)",
         **where,
     )
-    qdd = lagrange_acceleration(masses, q, qd, g)
+    qdd = lagrange_acceleration(masses, q, qd, g, tau)
     push = sym.constraint(
         "stance foot pushes on the slope",
         x,
@@ -209,6 +221,8 @@ class KneedWalker(HybridModel):
     }  # for axis labels
     title = "Kneed walker"
     reference = "Hsu Chen 2007; McGeer 1990; Tedrake, Underactuated Robotics"
+    inputs = ("hip_torque", "knee_torque")
+    input_units = ("N*m", "N*m")
     mesh = (4, 5)  # 20 RK8 steps per phase: discretisation error ~1e-11 at the defaults
 
     mass_hip: float = parameter(
@@ -313,7 +327,10 @@ class KneedWalker(HybridModel):
         q, qd = ca.vertcat(q1, q2, q3), ca.vertcat(q1d, q2d, q3d)
         geo0 = _walker(sym, q1, q2, q3)
         masses0 = _masses(sym, geo0)
-        flow0 = sym.function("flow", x0, ca.vertcat(qd, lagrange_acceleration(masses0, q, qd, g)))
+        tau_h, tau_k = sym.input("hip_torque"), sym.input("knee_torque")
+        tau0 = ca.vertcat(-tau_h, tau_h - tau_k, tau_k)  # generalised forces (module docstring)
+        acc0 = lagrange_acceleration(masses0, q, qd, g, tau0)
+        flow0 = sym.function("flow", x0, ca.vertcat(qd, acc0))
         # Knee strike: the knee locks; the stance contact (pinned or rolling) persists.
         locked = constrained_impact_velocity(masses0, q, qd, q3d - q2d)
         knee_strike = Transition(
@@ -328,7 +345,7 @@ class KneedWalker(HybridModel):
         )
         # The swing foot clears the slope; it starts on it (the trailing foot at heel strike), so
         # it must lift off at once (see _contact_constraints).
-        constraints0 = _contact_constraints(sym, x0, geo0, masses0, q, qd, at_start=True)
+        constraints0 = _contact_constraints(sym, x0, geo0, masses0, q, qd, tau0, at_start=True)
         fall0 = Transition(
             name="fall",
             guard=sym.function("guard", x0, ca.cos(q1)),
@@ -358,7 +375,10 @@ class KneedWalker(HybridModel):
         r, rd = ca.vertcat(p1, p2), ca.vertcat(p1d, p2d)
         geo1 = _walker(sym, p1, p2, p2)
         masses1 = _masses(sym, geo1)
-        flow1 = sym.function("flow", x1, ca.vertcat(rd, lagrange_acceleration(masses1, r, rd, g)))
+        tau1 = ca.vertcat(-tau_h, tau_h)  # the knee is latched: its torque does nothing
+        flow1 = sym.function(
+            "flow", x1, ca.vertcat(rd, lagrange_acceleration(masses1, r, rd, g, tau1))
+        )
         # Heel strike with the knee locked; the striking arc rolls (no slip) from then on.
         post = impact_velocity(
             masses1, r, rd, geo1["swing_contact"], contact_slip=-R * p2d * geo1["tangent"]
@@ -379,7 +399,7 @@ class KneedWalker(HybridModel):
         # With the knee locked the swing foot must still clear the slope until heel strike, where
         # its height returns to 0 (h = −2 (L − R) sin((q1 + q2)/2 − γ) sin((q1 − q2)/2): a leg
         # whose knee locks before it passes the stance leg scuffs).
-        constraints1 = _contact_constraints(sym, x1, geo1, masses1, r, rd, at_end=True)
+        constraints1 = _contact_constraints(sym, x1, geo1, masses1, r, rd, tau1, at_end=True)
         fall1 = Transition(
             name="fall",
             guard=sym.function("guard", x1, ca.cos(p1)),
@@ -422,3 +442,16 @@ class KneedWalker(HybridModel):
     def default_start(self) -> dict[str, float]:
         """A post-heel-strike state near the passive gait at the defaults (rounded)."""
         return {"q1": -0.19, "q1_dot": 1.1, "q2_dot": 0.06}
+
+    def input_rates(self, phase: int) -> ca.Function:
+        """The joint rates the torques do work on (rad/s): ``(q̇2 − q̇1, q̇3 − q̇2)`` in the
+        three-link phase, ``(q̇2 − q̇1, 0)`` with the knee locked."""
+        n_p = len(self.parameter_specs())
+        p = ca.SX.sym("p", n_p)
+        if phase == 0:
+            x = ca.SX.sym("x", 6)
+            rates = ca.vertcat(x[4] - x[3], x[5] - x[4])
+        else:
+            x = ca.SX.sym("x", 4)
+            rates = ca.vertcat(x[3] - x[2], ca.SX(0))
+        return ca.Function("input_rates", [x, p], [rates], ["x", "p"], ["rates"])
