@@ -11,9 +11,10 @@ import gaitopt
 from gaitopt import GaitoptInputError, ParameterError, ParameterPath
 from gaitopt.cli import main
 from gaitopt.continuation import PseudoArclength, continuation
-from gaitopt.curves import bifurcation_curve
+from gaitopt.curves import bifurcation_curve, curve_from
 from gaitopt.curves.follow import _w_of
 from gaitopt.curves.system import Parametrisation, augmented_system, bordering
+from gaitopt.shooting import transcription
 
 MASS_HIP_AT = 12.0  # kg: an intermediate point located exactly on the curve
 MASS_HIP_TO = 14.0  # kg: the curve's end
@@ -157,3 +158,120 @@ def test_cli_bad_input_exits_2_with_one_line(capsys, extra, needle):
     err = capsys.readouterr().err
     assert status == 2
     assert needle in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+# -- the kneed walker: its first PD and the clearance boundary in slope × foot radius ------------
+KNEED_RADIUS = 0.03  # m: the second radius at which the curves meet one-parameter continuation
+
+
+@pytest.fixture(scope="module")
+def kneed():
+    """The branch in the slope at R = 0 and at R = KNEED_RADIUS (gaitopt.continuation), and the
+    PD and clearance-boundary curves from R = 0 to KNEED_RADIUS."""
+    paths = None
+    out = {}
+    for radius in (0.0, KNEED_RADIUS):
+        model = gaitopt.model("kneed_walker", slope=0.0504, foot_radius=radius)
+        branch = continuation(model, "slope", to=0.13, cascade=False)
+        out[radius] = {sp.kind: sp for sp in branch.special_points}
+        out[radius]["branch"] = branch
+        if paths is None:
+            paths = (ParameterPath.of(model, "slope"), ParameterPath.of(model, "foot_radius"))
+    zero = out[0.0]
+    out["PD"] = curve_from(zero["PD"], "PD", paths, KNEED_RADIUS)
+    out["boundary"] = curve_from(
+        zero["boundary"], "boundary", paths, KNEED_RADIUS, first=zero["branch"].cycles[0]
+    )
+    return out
+
+
+def _slope_at(curve, radius: float) -> float:
+    lam = curve.params
+    row = np.flatnonzero(np.abs(lam[:, 1] - radius) < 1e-12)
+    assert row.size == 1
+    return float(lam[row[0], 0])
+
+
+def test_kneed_walker_pd_curve_meets_one_parameter_period_doublings(kneed):
+    # Independent method: gaitopt.continuation in the slope at fixed foot radius, its PD located by
+    # regula falsi on det(A + I) to 1e-10 (at R = 0: 0.1062117 rad).  Curve and branch solve the
+    # same condition, each located to 1e-10 with discretisation error ≤ 1e-10: 1e-8 rad.
+    curve = kneed["PD"]
+    assert curve.success and curve.message.startswith("reached foot_radius"), curve.message
+    for radius in (0.0, KNEED_RADIUS):
+        assert _slope_at(curve, radius) == pytest.approx(kneed[radius]["PD"].param, abs=1e-8)
+    assert kneed[0.0]["PD"].param == pytest.approx(0.1062117, abs=1e-7)
+    for cycle in curve.cycles:
+        assert cycle.success and cycle.verified
+        assert np.min(np.abs(cycle.multipliers + 1)) < 1e-8
+
+
+def test_kneed_walker_clearance_boundary_meets_one_parameter_boundary(kneed):
+    # The boundary is the swing foot grazing the slope mid-swing: an interior minimum of the
+    # declared clearance constraint touching zero, followed with its time t* as an unknown.
+    curve = kneed["boundary"]
+    assert curve.success and curve.message.startswith("reached foot_radius"), curve.message
+    assert "graze_min of 'swing foot above the slope'" in curve.condition
+    # Independent method: gaitopt.continuation in the slope, whose branch ends (0.1196457 rad at
+    # R = 0) where certification first fails, bisected to 1e-10.  Its checks accept a gait whose
+    # foot dips by less than they resolve (dense samples T/64 ≈ 4.7 ms apart around a minimum of
+    # curvature c̈ ≈ 0.08 m/s² hide dips up to ½ c̈ (2.3 ms)² ≈ 2e-7 m, i.e. 3e-6 rad at
+    # |∂c_min/∂γ| ≈ 0.075 m/rad; the verification simulation catches smaller ones), so its end
+    # can only lie beyond the true boundary, by at most 3e-6 rad.
+    for radius in (0.0, KNEED_RADIUS):
+        gap = kneed[radius]["boundary"].param - _slope_at(curve, radius)
+        assert -1e-9 < gap < 3e-6
+    # Every point's gait is certified (just inside: 1e-9 of the slope's scale) and verified.
+    for cycle, (slope, _) in zip(curve.cycles, curve.params, strict=True):
+        assert cycle.success and cycle.verified
+        assert 0 < slope - cycle.model.slope < 1e-9
+
+
+@pytest.mark.parametrize("radius", [0.0, KNEED_RADIUS])
+def test_kneed_walker_clearance_boundary_brackets_the_graze(kneed, radius):
+    # Independent method: the gait solved at the curve's slope ∓ 2e-8 rad, its three-link phase
+    # integrated by SciPy's DOP853 (rtol 1e-13) and the clearance sampled every 2.5 µs over the
+    # first 0.1 s: its lowest value must change sign across the curve (|∂c_min/∂γ| ≈ 0.075 m/rad
+    # makes that ±1.5e-9 m, far above the integration error and the 1e-10 fixed-point residual).
+    from scipy.integrate import solve_ivp
+
+    slope = _slope_at(kneed["boundary"], radius)
+    lowest = []
+    guess = kneed["boundary"].cycles[0 if radius == 0.0 else -1]
+    for offset in (-2e-8, 2e-8):
+        model = gaitopt.model("kneed_walker", slope=slope + offset, foot_radius=radius)
+        cycle = gaitopt.find_limit_cycle(model, guess, verify=False)
+        assert cycle.residual < 1e-10
+        phase = model.phases[0]
+        clearance = next(c for c in phase.constraints if c.outcome == "trip")
+        sol = solve_ivp(
+            lambda t, x, ph=phase, m=model: np.asarray(ph.flow(x, [], m.p)).ravel(),
+            (0.0, 0.1), cycle.orbit[0].x[:, 0], method="DOP853", rtol=1e-13, atol=1e-14,
+            dense_output=True,
+        )  # fmt: skip
+        t = np.linspace(1e-3, min(0.1, cycle.durations[0]), 40001)
+        c = np.asarray(clearance.function.map(t.size)(sol.sol(t), [], model.p)).ravel()
+        lowest.append(float(np.min(c)))
+    assert lowest[0] > 0 > lowest[1]
+
+
+def test_lift_off_rate_condition_matches_the_constraint_rate():
+    # Closed form of the definition: ċ = ∇c · f at the three-link phase's start, evaluated by
+    # the lift_off condition from the shooting unknowns and directly on the certified orbit
+    # (gaitopt.hybrid.rate_along): the same number to rounding (1e-12 m/s); 0.2757 m/s at the
+    # defaults (results/kneed_walker_slope).
+    from gaitopt.curves.system import constraint_condition
+    from gaitopt.hybrid import rate_along
+
+    cycle = gaitopt.find_limit_cycle(gaitopt.model("kneed_walker"))
+    tr = transcription(type(cycle.model), cycle.discretisation, 1)
+    g = constraint_condition(type(cycle.model), cycle.discretisation, 1, ("lift_off", 0, 0))
+    value = float(g(_w_of(cycle, tr), [], cycle.model.p))
+    phase = cycle.model.phases[0]
+    direct = float(
+        rate_along(phase.flow, phase.constraints[0].function)(
+            cycle.orbit[0].x[:, 0], [], cycle.model.p
+        )  # fmt: skip
+    )
+    assert value == pytest.approx(direct, abs=1e-12)
+    assert value == pytest.approx(0.2757, abs=1e-4)

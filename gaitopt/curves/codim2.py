@@ -16,8 +16,13 @@ of fixed points) and §10.2.2 (their test functions); the labels are MatCont's:
   sign (a tangent component; not a bifurcation of the gait but the extreme of the curve, e.g.
   the largest slope with a stable gait).
 
-A ``boundary`` that cuts a curve (the gait stops existing on it) is found by certification, not
-by a test function (see :mod:`gaitopt.curves.follow`).
+* on a ``boundary`` curve (no critical multiplier): ``PD`` ``∏(μⱼ + 1)`` where a period doubling
+  curve cuts it and ``LP`` ``∏(μⱼ − 1)`` where a fold curve does — the corners of the region
+  where the gait exists and is stable.
+
+A ``boundary`` that cuts a PD, LP or NS curve (the gait stops existing on it) is found by
+certification, not by a test function (see :mod:`gaitopt.curves.follow`); followed as a curve of
+its own, its crossing with the PD curve is located by the ``PD`` test above.
 """
 
 from __future__ import annotations
@@ -34,6 +39,9 @@ DESCRIPTIONS = {
     "R4": "1:4 resonance: the critical pair at ±i",
     "PDNS": "flip–Neimark–Sacker: a multiplier −1 and a complex pair on the unit circle",
     "LPNS": "fold–Neimark–Sacker: a multiplier +1 and a complex pair on the unit circle",
+    "PD": "the boundary cuts a period-doubling curve (a multiplier −1 where the gait ends): a "
+    "corner of the stable region",
+    "LP": "the boundary cuts a fold curve (a multiplier +1 where the gait ends)",
     "fold": "the curve turns back in this parameter (its tangent's component vanishes)",
     "boundary": "the gait stops existing on the curve",
 }
@@ -98,6 +106,8 @@ def tests(kind: str, mu: np.ndarray, tangent_lambda: np.ndarray, names: tuple[st
         out = {"LPPD": _prod(rest + 1), "R1": _prod(rest - 1)}
         if len(rest) > 1:
             out["LPNS"] = _pairs_product(rest)
+    elif kind == "boundary":
+        out = {"PD": _prod(mu + 1), "LP": _prod(mu - 1)}
     elif kind == "NS" and len(crit) == 2:
         kappa = float(((mu[crit[0]] + mu[crit[1]]) / 2).real)
         out = {"R1": kappa - 1, "R2": kappa + 1, "R3": kappa + 0.5, "R4": kappa}

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -31,11 +32,15 @@ from . import codim2
 from .result import Curve, CurvePoint
 from .system import (
     BOUNDARY_QUANTITIES,
+    CONSTRAINT_QUANTITIES,
     CURVE_KINDS,
     ParameterPath,
     Parametrisation,
     augmented_system,
     bordering,
+    constraint_condition,
+    phase_start,
+    return_map_jacobian,
     singular_matrix,
 )
 
@@ -43,6 +48,11 @@ __all__ = ["bifurcation_curve", "curve_from"]
 
 _LOCATE_TOL = 1e-10  # parameter accuracy of located points (absolute)
 _MAX_MESH_REFINEMENTS = 2
+#: A point of a boundary curve is exactly on the boundary, where the gait is marginal (a foot
+#: that grazes the slope, a lift-off rate of zero); the gait certified for it lies just inside,
+#: its first parameter moved by these fractions of its scale in turn until the verification
+#: simulation confirms it (one-parameter continuation's boundaries are located to 1e-10 alike).
+_INSIDE = (1e-9, 1e-8, 1e-7, 1e-6)
 #: Default step control along a curve (scaled arclength) and of the one-parameter search.
 CURVE_STEPS = PseudoArclength(step=0.05, max_step=0.2)
 BRANCH_STEPS = PseudoArclength()
@@ -201,9 +211,9 @@ def curve_from(
     if cycle is None or not cycle.success:
         curve.success, curve.message = False, "the special point carries no certified gait"
         return curve
-    boundary = None
+    boundary, extra = None, ()
     if kind == "boundary":
-        boundary, why = _vanishing_quantity(cycle, first)
+        boundary, why, extra, sigma = _vanishing_quantity(cycle, first)
         if boundary is None:
             curve.success = False
             curve.message = f"the boundary cannot be followed as a curve: {why}"
@@ -217,8 +227,11 @@ def curve_from(
             "NS": "a pair with μᵢμⱼ = 1: det(A ⊙ A − I) = 0 (bialternate, bordered)",
         }[kind]
     follower = _Follower(cycle, kind, paths, boundary, to, at, bounds, options, verify, tol)
+    if kind == "boundary":
+        follower.extra0, follower.sigma = np.asarray(extra, dtype=float), sigma
     follower.run()
     curve.cycles, curve.special_points = follower.cycles, follower.special_points
+    curve.located = follower.located
     curve.message = follower.stop
     curve.success = bool(follower.cycles)
     return curve
@@ -226,47 +239,106 @@ def curve_from(
 
 def _vanishing_quantity(cycle: LimitCycle, first: LimitCycle | None):
     """Which check quantity vanishes at a boundary: the one smallest relative to its value at
-    the branch's first gait (or to its own size)."""
+    the branch's first gait (or to its own size).
+
+    Returns ``(boundary, description, extra unknowns, σ)``: ``σ g > 0`` inside the region where
+    the gait exists.
+    """
     model = cycle.model
     tr = transcription(type(model), cycle.discretisation, cycle.steps)
     values = _check_quantities(cycle, tr)
     reference = _check_quantities(first, tr) if first is not None else None
     best, ratio_best = None, math.inf
-    for key, value in values.items():
+    for key, (value, scale, _) in values.items():
         ref = reference.get(key) if reference is not None else None
-        scale = abs(ref) if ref else max(abs(value), 1.0)
+        if key[0] not in CONSTRAINT_QUANTITIES and ref is not None and ref[0]:
+            scale = abs(ref[0])
         ratio = abs(value) / scale
         if ratio < ratio_best:
             best, ratio_best = key, ratio
     if best is None or ratio_best > 1e-3:
-        return None, (
-            "no duration, guard rate or admissibility vanishes at it (the gait ends otherwise: "
-            "an interior grazing, a diverging period or a failed simulation), so no smooth "
-            "defining condition is known"
+        return (
+            None,
+            (
+                "no duration, guard rate, admissibility, lift-off rate or interior minimum of "
+                "a declared constraint vanishes at it (the gait ends otherwise: a diverging period "
+                "or a failed simulation), so no smooth defining condition is known"
+            ),
+            (),
+            1.0,
         )
-    what, k = best
+    what, k = best[:2]
+    phase = model.phases[tr.chain[k]]
     label = {
         "duration": "a phase duration vanishes",
         "grazing": "the impact grazes (the guard's rate at the phase end vanishes)",
         "admissible": "the crossing becomes inadmissible (its admissibility function vanishes)",
+        "lift_off": "a constraint that starts at zero stops rising (its rate ∇c · f at the phase "
+        "start vanishes)",
+        "graze_min": "an interior minimum of a constraint touches zero (c(t*) = 0, ċ(t*) = 0, "
+        "t* an extra unknown)",
     }[what]
-    return best, f"{label}: {what} of phase {k} ({model.phases[tr.chain[k]].name}) = 0"
+    where = f"{what} of phase {k} ({phase.name}) = 0"
+    if what in CONSTRAINT_QUANTITIES:
+        where = f"{what} of '{phase.constraints[best[2]].name}' in phase {k} ({phase.name}) = 0"
+    sigma = 1.0
+    if what in ("grazing", "admissible") and reference is not None and best in reference:
+        sigma = 1.0 if reference[best][0] > 0 else -1.0
+    elif what in ("grazing", "admissible"):
+        sigma = 1.0 if values[best][0] > 0 else -1.0
+    return best, f"{label}: {where}", values[best][2], sigma
 
 
-def _check_quantities(cycle: LimitCycle, tr: Transcription) -> dict[tuple[str, int], float]:
+def _check_quantities(cycle: LimitCycle, tr: Transcription) -> dict[tuple, tuple]:
+    """Each candidate boundary quantity of a gait: ``key -> (value, scale, extra unknowns)``.
+
+    Besides the shooting checks, each declared unilateral constraint of each phase: its rate at
+    the phase start (``at_start`` constraints) and its lowest interior local minimum on the dense
+    samples (refined by a parabola through the three samples around it), relative to its
+    largest value on the phase."""
+    from ..hybrid import rate_along
+
     w = _w_of(cycle, tr)
+    p = cycle.model.p
     _, dg, adm, durations = (
-        np.asarray(v, dtype=float).ravel() for v in tr.checks(w, cycle.inputs, cycle.model.p)
+        np.asarray(v, dtype=float).ravel() for v in tr.checks(w, cycle.inputs, p)
     )
-    out = {}
+    out: dict[tuple, tuple] = {}
     for k, i in enumerate(tr.chain):
-        transition = cycle.model.phases[i].transitions[0]
-        out[("duration", k)] = durations[k]
-        out[("grazing", k)] = dg[k]
+        phase = cycle.model.phases[i]
+        transition = phase.transitions[0]
+        out[("duration", k)] = (durations[k], max(abs(durations[k]), 1.0), ())
+        out[("grazing", k)] = (dg[k], max(abs(dg[k]), 1.0), ())
         if transition.admissible is not None:
-            out[("admissible", k)] = adm[k]
-    assert all(what in BOUNDARY_QUANTITIES for what, _ in out)
+            out[("admissible", k)] = (adm[k], max(abs(adm[k]), 1.0), ())
+        arc = cycle.orbit[k]
+        for j, constraint in enumerate(phase.constraints):
+            c = np.asarray(constraint.function.map(arc.x.shape[1])(arc.x, cycle.inputs, p))
+            c = c.ravel()
+            size = max(float(np.max(np.abs(c))), 1e-12)
+            if constraint.at_start:
+                rate = rate_along(phase.flow, constraint.function)
+                x0 = np.asarray(phase_start(tr, w, p, k), dtype=float).ravel()
+                r0 = float(rate(x0, cycle.inputs, p))
+                # relative to the rate that would reach c's size over the phase
+                out[("lift_off", k, j)] = (r0, size / max(arc.t[-1] - arc.t[0], 1e-12), ())
+            lo, hi = (1 if constraint.at_start else 0), len(c) - (2 if constraint.at_end else 1)
+            minima = [
+                idx for idx in range(max(lo, 1), min(hi, len(c) - 1))
+                if c[idx] <= c[idx - 1] and c[idx] <= c[idx + 1]
+            ]  # fmt: skip
+            if minima:
+                idx = min(minima, key=lambda m: c[m])
+                t_star = _parabola_vertex(arc.t[idx - 1 : idx + 2] - arc.t[0], c[idx - 1 : idx + 2])
+                out[("graze_min", k, j)] = (float(c[idx]), size, (t_star,))
+    assert all(key[0] in BOUNDARY_QUANTITIES for key in out)
     return out
+
+
+def _parabola_vertex(t: np.ndarray, c: np.ndarray) -> float:
+    """Abscissa of the vertex of the parabola through three points (the middle one if flat)."""
+    a, b, _ = np.polyfit(t, c, 2)
+    return float(-b / (2 * a)) if a > 0 and t[0] <= -b / (2 * a) <= t[-1] else float(t[1])
 
 
 def _w_of(cycle: LimitCycle, tr: Transcription) -> np.ndarray:
@@ -295,7 +367,13 @@ class _Follower:
     def __init__(self, cycle, kind, paths, boundary, to, at, bounds, options, verify, tol):
         self.kind, self.paths, self.boundary = kind, paths, boundary
         self.options, self.verify, self.tol = options, verify, tol
-        self.par = Parametrisation.build(cycle.model, paths, cycle.inputs)
+        par = Parametrisation.build(cycle.model, paths, cycle.inputs)
+        # A second parameter starting at (or near) zero is scaled by a tenth of its span, so that
+        # the arclength step means the same share of the way whatever the start value.
+        span = abs(float(to) - par.lam0[1])
+        scale = par.scale.copy()
+        scale[1] = max(scale[1], 0.1 * span)
+        self.par = replace(par, scale=scale)
         self.to = float(to)
         self.dir2 = 1.0 if self.to > self.par.lam0[1] else -1.0
         self.at = sorted(float(v) for v in at)
@@ -308,8 +386,13 @@ class _Follower:
         self.finest = cycle.discretisation.steps * 2**_MAX_MESH_REFINEMENTS
         self.b, self.c = self._border(cycle.jacobian)
         self.cycles: list[LimitCycle] = []
+        self.located: list[tuple[float, float]] = []  # (λ₁, λ₂) on the curve, per cycle
         self.special_points: list[CurvePoint] = []
         self.stop = ""
+        self.extra0 = np.zeros(self.system.extra)  # initial extra unknowns (t* of a grazing)
+        self.sigma = 1.0  # σ g > 0 where the gait exists (boundary curves)
+        self._shift = 0.0  # the boundary's margin row is g − shift (the gait just inside)
+        self._last = None  # the last evaluation, reused at the same point
 
     # -- the equations ---------------------------------------------------------------------
     @property
@@ -325,7 +408,24 @@ class _Follower:
         return bordering(self.kind, np.asarray(A, dtype=float))
 
     def evaluate(self, y):
-        return self.system.evaluate(y, self.b, self.c, self.par)
+        key = (y.tobytes(), self._shift, self.b.tobytes(), self.c.tobytes(), id(self.system))
+        if self._last is not None and self._last[0] == key:  # the tangent, tests, multipliers
+            H, J, A = self._last[1]
+            return H.copy(), J.copy(), A.copy()
+        H, J, A = self.system.evaluate(y, self.b, self.c, self.par)
+        if self._shift:
+            H[self.tr.size] -= self._shift
+        self._last = (key, (H.copy(), J.copy(), A.copy()))
+        return H, J, A
+
+    def w(self, y: np.ndarray) -> np.ndarray:
+        """The shooting unknowns of ``y``."""
+        return y[: self.tr.size]
+
+    def accept(self, cycle: LimitCycle, y: np.ndarray) -> None:
+        """Append a certified point (its gait and its exact curve parameters)."""
+        self.cycles.append(cycle)
+        self.located.append(tuple(float(v) for v in self.lam(y)))
 
     def weights(self, y: np.ndarray) -> np.ndarray:
         n = y.size - 2
@@ -363,8 +463,8 @@ class _Follower:
 
     def fix(self, which: int, value: float) -> tuple[np.ndarray, float]:
         """The constraint row holding curve parameter ``which`` at ``value``."""
-        row = np.zeros(self.tr.size + 2)
-        row[self.tr.size + which] = 1.0
+        row = np.zeros(self.tr.size + self.system.extra + 2)
+        row[row.size - 2 + which] = 1.0
         return row, value / self.par.scale[which]
 
     # -- points ---------------------------------------------------------------------------
@@ -402,15 +502,60 @@ class _Follower:
                 f"the discretisation error {error:.2g} exceeds tol {self.tol:g} at the finest "
                 f"mesh ({self.tr.disc.steps} RK steps per segment) near {self._where(y)}"
             )
+        if self.kind == "boundary":
+            return self._certified_inside(y, error), y
         lam = self.lam(y)
         model = self.par.model_at(lam)
         if model is None:
             return None, y
         cycle = certify(
-            model, self.tr, y[:-2], self.par.u(lam), verify=self.verify, tol=self.tol,
+            model, self.tr, self.w(y), self.par.u(lam), verify=self.verify, tol=self.tol,
             discretisation_error=error,
         )  # fmt: skip
         return cycle, y
+
+    def _certified_inside(self, y: np.ndarray, error: float) -> LimitCycle | None:
+        """The gait certified for a point exactly on a boundary: the one just inside, at the
+        same second parameter and the first moved by ``δ = f · scale`` (``f`` from
+        :data:`_INSIDE` in turn) to the side where ``σ g`` grows (``g`` the boundary's margin:
+        the minimum of a constraint, a lift-off rate, a duration ...; ``σ g > 0`` inside), the
+        orbit solved there by Newton on the shooting equations alone."""
+        N = self.tr.size
+        _, J, _ = self.evaluate(y)
+        rows = [r for r in range(J.shape[0]) if r != N]
+        e1, e2 = np.zeros(y.size), np.zeros(y.size)
+        e1[-2], e2[-1] = 1.0, 1.0
+        rhs = np.zeros(len(rows) + 2)
+        rhs[-1] = 1.0
+        try:
+            dy = np.linalg.solve(np.vstack([J[rows], e2, e1]), rhs)  # dy/dℓ₁ along the margin
+        except np.linalg.LinAlgError:
+            return None
+        dg = float(J[N] @ dy)
+        if not np.isfinite(dg) or dg == 0:
+            return None
+        cycle = None
+        for f in _INSIDE:
+            dl = math.copysign(f, self.sigma * dg)  # in ℓ₁ = λ₁ / scale
+            lam = self.lam(y) + np.array([dl * self.par.scale[0], 0.0])
+            model = self.par.model_at(lam)
+            if model is None or not self.bounds[0] <= lam[0] <= self.bounds[1]:
+                return None
+            u, p = self.par.u(lam), self.par.p(lam)
+            w = self.w(y + dy * dl)
+            for _ in range(self.options.max_corrector):
+                ev = self.tr.evaluate(w, u, p)
+                if np.max(np.abs(ev.F)) <= self.tol or not np.all(np.isfinite(ev.F)):
+                    break
+                w = w - np.linalg.solve(ev.F_w, ev.F)
+            cycle = certify(
+                model, self.tr, w, u, verify=self.verify, tol=self.tol, discretisation_error=error,
+                note=f"certified {f:g} × scale inside the boundary ({self.paths[0].name} moved by "
+                f"{lam[0] - self.lam(y)[0]:.3g})",
+            )  # fmt: skip
+            if cycle.success:
+                return cycle
+        return cycle
 
     def _discretisation_error(self, y: np.ndarray) -> float:
         """One Newton correction of the extended system towards twice the RK steps: the
@@ -418,11 +563,12 @@ class _Follower:
         both parameters, in their units)."""
         lam = self.lam(y)
         p, u = self.par.p(lam), self.par.u(lam)
-        fine = transcription(type(self.par.model), _doubled(self.tr.disc), self.steps)
-        F_fine = np.asarray(fine.residual(y[:-2], u, p), dtype=float).ravel()
+        F_fine = self.tr.fine_residual(self.w(y), u, p)
         H, J, _ = self.evaluate(y)
+        fine = transcription(type(self.par.model), _doubled(self.tr.disc), self.steps)
         g_fine = self._condition(fine, y[:-2], u, p)
-        rhs = np.concatenate([F_fine, [g_fine - H[-1]], [0.0]])
+        N = self.tr.size
+        rhs = np.concatenate([F_fine, g_fine - H[N:], [0.0]])
         row = np.zeros(y.size)
         row[-1] = 1.0  # at fixed λ₂: how far the curve's λ₁ moves
         try:
@@ -431,20 +577,31 @@ class _Follower:
             return math.inf
         return float(max(np.max(np.abs(dy[:-2])), np.max(np.abs(dy[-2:] * self.par.scale))))
 
-    def _condition(self, tr: Transcription, w, u, p) -> float:
-        """The defining condition ``g`` evaluated numerically with another transcription."""
+    def _condition(self, tr: Transcription, wz, u, p) -> np.ndarray:
+        """The defining condition ``g`` evaluated numerically with another transcription
+        (``wz``: the shooting unknowns and the extra ones)."""
+        if self.kind == "boundary" and self.boundary[0] in CONSTRAINT_QUANTITIES:
+            g = constraint_condition(tr.model_cls, tr.disc, tr.cycles, self.boundary)(wz, u, p)
+            return np.asarray(g, dtype=float).ravel() - np.array(
+                [self._shift] + [0.0] * self.system.extra
+            )
+        w = wz[: tr.size]
         if self.kind == "boundary":
-            what, k = self.boundary
+            what, k = self.boundary[:2]
             _, dg, adm, durations = (np.asarray(v, dtype=float).ravel() for v in tr.checks(w, u, p))
-            return float({"duration": durations, "grazing": dg, "admissible": adm}[what][k])
-        J_w, J_u, _, _ = tr.linearisation(w, u, p)
-        A, _ = section_jacobians(np.asarray(J_w), np.asarray(J_u), tr.m, tr.n_g)
+            value = {"duration": durations, "grazing": dg, "admissible": adm}[what][k]
+            return np.array([float(value) - self._shift])
+        if tr.assembly() is not None:  # the compiled kernels of the finer mesh
+            A = return_map_jacobian(tr, tr.evaluate(w, u, p).F_w)
+        else:
+            J_w, J_u, _, _ = tr.linearisation(w, u, p)
+            A, _ = section_jacobians(np.asarray(J_w), np.asarray(J_u), tr.m, tr.n_g)
         M = singular_matrix(self.kind, A)
         n = M.shape[0]
         K = np.block([[M, self.b[:, None]], [self.c[None, :], np.zeros((1, 1))]])
         rhs = np.zeros(n + 1)
         rhs[-1] = 1.0
-        return float(np.linalg.solve(K, rhs)[-1])
+        return np.array([float(np.linalg.solve(K, rhs)[-1])])
 
     # -- the loop ----------------------------------------------------------------------------
     def run(self) -> None:
@@ -456,7 +613,9 @@ class _Follower:
     def _run(self) -> None:
         opts = self.options
         tr = self.tr
-        y = np.concatenate([_w_of(self.start_cycle, tr), self.par.lam0 / self.par.scale])
+        y = np.concatenate(
+            [_w_of(self.start_cycle, tr), self.extra0, self.par.lam0 / self.par.scale]
+        )
         y, ok, _ = self.correct(y, *self.fix(1, float(self.par.lam0[1])))
         if not ok:
             self.stop = "the extended system does not converge at the start point"
@@ -466,7 +625,7 @@ class _Follower:
             why = cycle.message if cycle is not None else "parameters out of range"
             self.stop = f"the start point is not a certified gait: {why}"
             return
-        self.cycles.append(cycle)
+        self.accept(cycle, y)
         self.b, self.c = self._border(cycle.jacobian)
         start = np.zeros_like(y)
         start[-1] = self.dir2
@@ -505,7 +664,7 @@ class _Follower:
             t_new = self.tangent(y_new, t)
             new_tests = self.tests_at(y_new, t_new)
             self._codim2_between(y, t, y_new, tests, new_tests)
-            self.cycles.append(cycle)
+            self.accept(cycle, y_new)
             self.b, self.c = self._border(cycle.jacobian)
             if target is not None:
                 self.stop = f"reached {self.paths[1].name} = {self.to:.10g}"
@@ -529,9 +688,9 @@ class _Follower:
         y_at, ok = self._land(y, t, value)
         if not ok:
             return
-        cycle, _ = self.certified(y_at)
+        cycle, y_at = self.certified(y_at)
         if cycle is not None and cycle.success:
-            self.cycles.append(cycle)
+            self.accept(cycle, y_at)
 
     # -- codimension two ---------------------------------------------------------------------
     def _codim2_between(self, y, t, y_new, tests, new_tests) -> None:
@@ -617,7 +776,7 @@ class _Follower:
                 if cycle is not None:
                     reason = cycle.message
         if last is not self.cycles[-1]:
-            self.cycles.append(last)
+            self.accept(last, y_last)
         self.special_points.append(
             CurvePoint(
                 "boundary", self.values(y_last), len(self.cycles) - 1, last,

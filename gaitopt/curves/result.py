@@ -72,7 +72,13 @@ class Curve:
     paths : (ParameterPath, ParameterPath)
         The two curve parameters (``param`` free at the start, ``param2`` continued to ``to``).
     cycles : list of LimitCycle
-        The certified gait at each point, in curve order.
+        The certified gait at each point, in curve order.  On a ``boundary`` curve the point
+        itself is exactly on the boundary, where the gait is marginal; its certified gait is the
+        one just inside (the first parameter moved by 1e-9 of its scale, more only if the
+        verification simulation needs it; the gait's ``note`` says how far).
+    located : list of (float, float)
+        ``(λ₁, λ₂)`` of each point as located on the curve (equal to the gait's parameters except
+        on a boundary curve).
     special_points : list of CurvePoint
         Codimension-two points and the boundary, in curve order.
     start : SpecialPoint or None
@@ -90,6 +96,7 @@ class Curve:
     paths: tuple[ParameterPath, ParameterPath]
     cycles: list[LimitCycle] = field(default_factory=list)
     special_points: list[CurvePoint] = field(default_factory=list)
+    located: list[tuple[float, float]] = field(default_factory=list)
     start: SpecialPoint | None = None
     condition: str = ""
     message: str = ""
@@ -107,7 +114,9 @@ class Curve:
         return self.paths[1].name
 
     def values(self, which: int) -> np.ndarray:
-        """Curve parameter ``which`` (0 or 1) at each point."""
+        """Curve parameter ``which`` (0 or 1) at each point (as located on the curve)."""
+        if len(self.located) == len(self.cycles):
+            return np.array([lam[which] for lam in self.located], dtype=float)
         path = self.paths[which]
         return np.array([path.value_of(c.model) for c in self.cycles])
 
@@ -131,8 +140,10 @@ class Curve:
     def as_dict(self) -> dict[str, Any]:
         """The JSON object of ``gaitopt continue --follow ... --json``."""
         points = []
-        for c in self.cycles:
-            entry = {p.name: float(p.value_of(c.model)) for p in self.paths}
+        for c, lam in zip(self.cycles, self.params, strict=True):
+            entry = {p.name: float(v) for p, v in zip(self.paths, lam, strict=True)}
+            if self.kind == "boundary":
+                entry["certified_at"] = {p.name: float(p.value_of(c.model)) for p in self.paths}
             entry.update(_cycle_dict(c))
             points.append(entry)
         return {

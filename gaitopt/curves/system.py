@@ -22,7 +22,17 @@ scaled curve parameters ``ℓᵢ = λᵢ / scaleᵢ``.  Equations ``H(y) = (F(w,
   product whose eigenvalues are ``μᵢ μⱼ, i < j``: singular when ``μᵢ μⱼ = 1``);
 * ``g = q(w, u, p)`` for a ``boundary``: the quantity of the shooting checks that vanishes where
   the gait stops existing — a phase duration (a phase shrinks to nothing), the guard's rate at a
-  phase end (a grazing impact), or an admissibility function (a crossing becomes spurious).
+  phase end (a grazing impact), or an admissibility function (a crossing becomes spurious);
+* or a declared unilateral constraint ``c(x) ≥ 0`` (:class:`gaitopt.hybrid.Constraint`) becoming
+  active: for one that starts at zero (``at_start``, a trailing foot on the ground) its lift-off
+  rate ``g = ċ(x(0)) = ∇c · f`` at the phase start (``"lift_off"``); for an interior minimum of
+  ``c`` touching zero (``"graze_min"``, a foot that scuffs the slope mid-swing) the grazing
+  condition of Nordmark ("Non-periodic motion caused by grazing incidence in an impact
+  oscillator", J. Sound Vib. 145(2), 1991) and di Bernardo et al. ("Piecewise-smooth Dynamical
+  Systems", Springer 2008, §7.1), ``g = (c(x(t*)), ċ(x(t*))) = 0``, with the time ``t*`` of the
+  minimum an extra unknown: ``y = (w, t*, ℓ₁, ℓ₂)``, ``x(t*)`` integrated from the phase start
+  by ``S × steps`` RK steps of ``t*/(S × steps)`` (at least as fine as the mesh, smooth in
+  ``t*``).
 
 The parameters enter through :class:`ParameterPath`: each curve parameter sets one model
 parameter, or several along an affine path (the compass gait's leg-mass position ``a`` with
@@ -34,7 +44,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from typing import Any
 
 import casadi as ca
@@ -53,10 +63,16 @@ __all__ = [
     "bialternate",
     "bordering",
     "BOUNDARY_QUANTITIES",
+    "CONSTRAINT_QUANTITIES",
+    "constraint_condition",
+    "n_extra",
 ]
 
 CURVE_KINDS = ("PD", "LP", "NS", "boundary")
-BOUNDARY_QUANTITIES = ("duration", "grazing", "admissible")
+BOUNDARY_QUANTITIES = ("duration", "grazing", "admissible", "lift_off", "graze_min")
+#: Boundary quantities of a declared unilateral constraint: ``(what, chain index, constraint
+#: index)``; the others are ``(what, chain index)``.
+CONSTRAINT_QUANTITIES = ("lift_off", "graze_min")
 
 
 @dataclass(frozen=True)
@@ -307,39 +323,100 @@ class AugmentedSystem:
         The shooting equations.
     kind : str
         ``"PD"``, ``"LP"``, ``"NS"`` or ``"boundary"``.
-    boundary : (str, int) or None
+    boundary : tuple or None
         For a boundary: the vanishing quantity (one of :data:`BOUNDARY_QUANTITIES`) and the
-        phase (chain index) it belongs to.
+        phase (chain index) it belongs to, and for a constraint (:data:`CONSTRAINT_QUANTITIES`)
+        its index in the phase's ``constraints``.
     function : casadi.Function
         ``(w, ℓ, b, c, p_base, K, u_base, D, scale) -> (g, ∂g/∂y, A)``: the condition, its
-        exact gradient (reverse-mode AD) and the return map's Jacobian.
+        exact gradient (reverse-mode AD) and the return map's Jacobian (``w`` followed by the
+        extra unknowns, if any: ``t*`` of a ``graze_min`` boundary); built on first use.  ``PD``
+        and ``LP`` curves of models with compiled shooting kernels do without it (see
+        :meth:`evaluate`).
     """
 
     tr: Transcription
     kind: str
-    boundary: tuple[str, int] | None
-    function: ca.Function
+    boundary: tuple | None
+    builder: Any = field(repr=False, compare=False)
+
+    @cached_property
+    def function(self) -> ca.Function:
+        """The CasADi function of the condition (built on first use)."""
+        return self.builder()
+
+    @property
+    def kernel_path(self) -> bool:
+        """Whether the condition comes from the compiled shooting kernels alone."""
+        return self.kind in ("PD", "LP") and self.tr.assembly() is not None
 
     @property
     def border(self) -> int:
         """Length of the bordering vectors."""
         return border_size(self.kind, self.tr.m)
 
+    @property
+    def extra(self) -> int:
+        """Unknowns beyond the shooting ones and the two parameters (``t*`` of a grazing)."""
+        return n_extra(self.boundary)
+
     def evaluate(
         self, y: np.ndarray, b: np.ndarray, c: np.ndarray, par: Parametrisation
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``H(y)``, ``∂H/∂y`` and the return map's Jacobian ``A`` at ``y``."""
-        w, ell = y[:-2], y[-2:]
-        g, grad, A = self.function(w, ell, b, c, *par.inputs().values())
+        N = self.tr.size
+        wz, w, ell = y[:-2], y[:N], y[-2:]
         lam = ell * par.scale
-        F, F_w, F_p, F_u = (
-            np.asarray(v, dtype=float)
-            for v in self.tr.residual_jacobians(w, par.u(lam), par.p(lam))
-        )
-        F_ell = (F_p @ par.K + F_u @ par.D) * par.scale  # ∂F/∂ℓ = (F_p K + F_u D) diag(scale)
-        H = np.concatenate([F.ravel(), [float(g)]])
-        J = np.vstack([np.hstack([F_w, F_ell]), np.asarray(grad, dtype=float).ravel()])
+        u, p = par.u(lam), par.p(lam)
+        ev = self.tr.evaluate(w, u, p)  # compiled kernels where they exist
+        F_ell = (ev.F_p @ par.K + ev.F_u @ par.D) * par.scale  # ∂F/∂ℓ = (F_p K + F_u D) diag(s)
+        if self.kernel_path:
+            g, grad, A = self._bordered_from_kernels(w, u, p, ev, F_ell, b, c, par)
+        else:
+            g, grad, A = self.function(wz, ell, b, c, *par.inputs().values())
+        g = np.asarray(g, dtype=float).ravel()
+        if self.kind == "boundary":  # A from the compiled shooting Jacobian (no 2nd derivatives)
+            A = return_map_jacobian(self.tr, ev.F_w)
+        F_block = np.hstack([ev.F_w, np.zeros((N, self.extra)), F_ell])
+        H = np.concatenate([np.asarray(ev.F, dtype=float).ravel(), g])
+        J = np.vstack([F_block, np.asarray(grad, dtype=float).reshape(g.size, y.size)])
         return H, J, np.asarray(A, dtype=float).reshape(self.tr.m, self.tr.m)
+
+    def _bordered_from_kernels(self, w, u, p, ev, F_ell, b, c, par):
+        """``g``, ``∂g/∂y`` and ``A`` of a PD or LP curve from the compiled shooting Jacobian.
+
+        ``g`` from the bordered system ``[M b; cᵀ 0] [v; g] = [0; 1]`` with ``M = A ± I`` (``A``
+        by the implicit function theorem), and its gradient by the minimally augmented formula
+        ``g_y = −ωᵀ M_y v`` (Govaerts 2000, §4.3.2; ω from the transposed bordered system).
+        ``ωᵀ A v`` is, by the adjoint of the section constraints, ``ψᵀ J(w) δw`` with
+        ``δw = (v, −G_z⁻¹ G_s v)`` and ``ψ = (−G_z⁻ᵀ P_zᵀ ω, ω)`` held fixed, so its gradient is
+        the directional derivative of ``ψᵀ ∂F/∂y`` along ``δw``: a central difference of two more
+        kernel Jacobians (step ``ε``, truncation error ``O(ε²)`` ≈ 1e-10 relative, exact ``g``;
+        the Newton corrector needs only the ``g`` to be exact).
+        """
+        tr, m, n_g = self.tr, self.tr.m, self.tr.n_g
+        J = np.array(ev.F_w, dtype=float)
+        J[n_g:, :m] += np.eye(m)  # ∂[G; P]/∂w
+        G_s, G_z, P_s, P_z = J[:n_g, :m], J[:n_g, m:], J[n_g:, :m], J[n_g:, m:]
+        GzGs = np.linalg.solve(G_z, G_s) if n_g else np.zeros((0, m))
+        A = P_s - P_z @ GzGs
+        M = singular_matrix(self.kind, A)
+        K = np.block([[M, b[:, None]], [c[None, :], np.zeros((1, 1))]])
+        rhs = np.zeros(m + 1)
+        rhs[-1] = 1.0
+        vg = np.linalg.solve(K, rhs)
+        omega_g = np.linalg.solve(K.T, rhs)
+        v, g, omega = vg[:m], vg[m], omega_g[:m]
+        dw = np.concatenate([v, -GzGs @ v])
+        psi = np.concatenate([-np.linalg.solve(G_z.T, P_z.T @ omega) if n_g else [], omega])
+        eps = 1e-5 * (1.0 + np.max(np.abs(w))) / max(np.max(np.abs(dw)), 1e-300)
+        rows = []
+        for sign in (1.0, -1.0):
+            e = tr.evaluate(w + sign * eps * dw, u, p)
+            F_ell_e = (e.F_p @ par.K + e.F_u @ par.D) * par.scale
+            rows.append(psi @ np.hstack([e.F_w, np.zeros((tr.size, self.extra)), F_ell_e]))
+        grad = -(rows[0] - rows[1]) / (2 * eps)
+        return g, grad, A
 
 
 def augmented_system(
@@ -347,7 +424,7 @@ def augmented_system(
     disc: MultipleShooting,
     steps: int,
     kind: str,
-    boundary: tuple[str, int] | None = None,
+    boundary: tuple | None = None,
 ) -> AugmentedSystem:
     """The cached :class:`AugmentedSystem` (built once per class, mesh, period and kind)."""
     return _augmented_system(model_cls, disc, steps, kind, boundary)
@@ -357,11 +434,26 @@ def augmented_system(
 def _augmented_system(model_cls, disc, steps, kind, boundary) -> AugmentedSystem:
     if kind not in CURVE_KINDS:
         raise GaitoptInputError(f"`kind` must be one of {', '.join(CURVE_KINDS)}, got {kind!r}")
+    if kind == "boundary" and (boundary is None or boundary[0] not in BOUNDARY_QUANTITIES):
+        raise GaitoptInputError(f"a boundary curve needs one of {BOUNDARY_QUANTITIES}")
+    tr = transcription(model_cls, disc, steps)
+    if kind == "NS" and border_size(kind, tr.m) == 0:
+        raise GaitoptInputError(
+            f"{model_cls.name} has {tr.m} section coordinate(s): no complex pair of multipliers, "
+            f"so no Neimark–Sacker curve; follow PD or LP"
+        )
+    return AugmentedSystem(
+        tr, kind, boundary, lambda: _condition_function(model_cls, disc, steps, kind, boundary)
+    )
+
+
+def _condition_function(model_cls, disc, steps, kind, boundary) -> ca.Function:
+    """The CasADi function of :attr:`AugmentedSystem.function`."""
     tr = transcription(model_cls, disc, steps)
     m, n_g, n_p, n_u = tr.m, tr.n_g, len(model_cls.parameter_specs()), len(model_cls.inputs)
     nb = border_size(kind, m)
     sym = ca.SX if disc.steps * len(tr.chain) <= _SX_MAX_STEPS else ca.MX
-    w, ell = sym.sym("w", tr.size), sym.sym("ell", 2)
+    w, ell = sym.sym("w", tr.size + n_extra(boundary)), sym.sym("ell", 2)
     b, c = sym.sym("b", nb), sym.sym("c", nb)
     p_base, K = sym.sym("p_base", n_p), sym.sym("K", n_p, 2)
     u_base, D = sym.sym("u_base", n_u), sym.sym("D", n_u, 2)
@@ -369,36 +461,111 @@ def _augmented_system(model_cls, disc, steps, kind, boundary) -> AugmentedSystem
     lam = scale * ell
     p = p_base + K @ lam
     u = u_base + D @ lam
-    J_w, _, _, _ = _symbolic(tr.linearisation, sym)(w, u, p)
-    # A = P_s − P_z G_z⁻¹ G_s (implicit function theorem; gaitopt.stability.section_jacobians)
-    G_s, G_z, P_s, P_z = J_w[:n_g, :m], J_w[:n_g, m:], J_w[n_g:, :m], J_w[n_g:, m:]
-    A = P_s - P_z @ ca.solve(G_z, G_s) if n_g else P_s
     if kind == "boundary":
-        if boundary is None or boundary[0] not in BOUNDARY_QUANTITIES:
-            raise GaitoptInputError(f"a boundary curve needs one of {BOUNDARY_QUANTITIES}")
-        what, k = boundary
+        A = sym(m, m)  # numerically, from the shooting kernels (AugmentedSystem.evaluate)
+    else:
+        J_w, _, _, _ = _symbolic(tr.linearisation, sym)(w[: tr.size], u, p)
+        # A = P_s − P_z G_z⁻¹ G_s (implicit function theorem; gaitopt.stability.section_jacobians)
+        G_s, G_z, P_s, P_z = J_w[:n_g, :m], J_w[:n_g, m:], J_w[n_g:, :m], J_w[n_g:, m:]
+        A = P_s - P_z @ ca.solve(G_z, G_s) if n_g else P_s
+    if kind == "boundary" and boundary[0] in CONSTRAINT_QUANTITIES:
+        g = _symbolic(constraint_condition(model_cls, disc, steps, boundary), sym)(w, u, p)
+    elif kind == "boundary":
+        what, k = boundary[:2]
         _, dg, adm, durations = _symbolic(tr.checks, sym)(w, u, p)
         g = {"duration": durations, "grazing": dg, "admissible": adm}[what][k]
     else:
-        if nb == 0:
-            raise GaitoptInputError(
-                f"{model_cls.name} has {m} section coordinate(s): no complex pair of multipliers, "
-                f"so no Neimark–Sacker curve; follow PD or LP"
-            )
         M = singular_matrix(kind, A)
         bordered = ca.blockcat([[M, b], [c.T, sym(1, 1)]])
         rhs = ca.DM.zeros(nb + 1)
         rhs[nb] = 1
         g = ca.solve(bordered, rhs)[nb]
     y = ca.vertcat(w, ell)
-    # The scalar condition's gradient by reverse mode (one sweep through the second derivatives
-    # of the flow, not N forward directions); F's Jacobian comes from the transcription's own AD
-    # (``residual_jacobians``) and the chain rule through the affine parameter map.
-    function = ca.Function(
+    # The condition's gradient by reverse mode (one sweep per condition through the second
+    # derivatives of the flow, not N forward directions); F's Jacobian comes from the compiled
+    # shooting kernels (``Transcription.evaluate``) and the chain rule through the affine
+    # parameter map.
+    return ca.Function(
         f"condition_{kind}",
         [w, ell, b, c, p_base, K, u_base, D, scale],
-        [g, ca.gradient(g, y), A],
+        [g, ca.jacobian(g, y), A],
         ["w", "ell", "b", "c", "p_base", "K", "u_base", "D", "scale"],
         ["g", "grad_g", "A"],
     )
-    return AugmentedSystem(tr, kind, boundary, function)
+
+
+def return_map_jacobian(tr: Transcription, F_w: np.ndarray) -> np.ndarray:
+    """``A = ∂P/∂s`` from the shooting Jacobian ``∂F/∂w`` (``F = [G; P − s]``; the implicit
+    function theorem, :func:`gaitopt.stability.section_jacobians`)."""
+    J = np.array(F_w, dtype=float)
+    J[tr.n_g :, : tr.m] += np.eye(tr.m)
+    G_s, G_z, P_s, P_z = (
+        J[: tr.n_g, : tr.m],
+        J[: tr.n_g, tr.m :],
+        J[tr.n_g :, : tr.m],
+        J[tr.n_g :, tr.m :],
+    )
+    return P_s - P_z @ np.linalg.solve(G_z, G_s) if tr.n_g else P_s
+
+
+# -- declared unilateral constraints becoming active ----------------------------------------------
+def n_extra(boundary: tuple | None) -> int:
+    """Extra unknowns of a boundary's extended system: ``t*`` for ``graze_min``, else none."""
+    return 1 if boundary is not None and boundary[0] == "graze_min" else 0
+
+
+def phase_start(tr: Transcription, w: Any, p: Any, k: int) -> Any:
+    """The state where chain phase ``k`` begins, from the shooting unknowns (symbolic or
+    numeric): the lifted section point for ``k = 0``, else the phase's first node."""
+    if k == 0:
+        return tr.section.lift(w[: tr.m], p)
+    _, _, off, (n, _) = next(item for item in tr.layout if item[0] == "nodes" and item[1] == k)
+    return w[off : off + n]
+
+
+def constraint_condition(
+    model_cls: type[HybridModel], disc: MultipleShooting, steps: int, boundary: tuple
+) -> ca.Function:
+    """``g(w⁺, u, p)``: the defining condition of a constraint boundary ``(what, k, j)`` —
+    constraint ``j`` of chain phase ``k`` — with ``w⁺ = (w, t*)`` for ``graze_min``.
+
+    * ``lift_off``: ``ċ(x₀) = ∇c(x₀) · f(x₀)``, the rate at the phase start of a constraint that
+      starts at zero (``at_start``): the trailing foot stops lifting off where it vanishes;
+    * ``graze_min``: ``(c(x(t*)), ċ(x(t*)))``, an interior minimum of ``c`` touching zero,
+      ``x(t*)`` by ``S × steps`` RK steps from the phase start (the grazing condition of
+      Nordmark 1991; di Bernardo et al. 2008, §7.1).
+    """
+    return _constraint_condition(model_cls, disc, steps, tuple(boundary))
+
+
+@lru_cache(maxsize=32)
+def _constraint_condition(model_cls, disc, steps, boundary) -> ca.Function:
+    from ..hybrid import rate_along
+    from ..integrators import segment_function
+
+    what, k, j = boundary
+    if what not in CONSTRAINT_QUANTITIES:
+        raise GaitoptInputError(f"`boundary` must be one of {CONSTRAINT_QUANTITIES}, got {what!r}")
+    tr = transcription(model_cls, disc, steps)
+    phase = tr.phases[tr.chain[k]]
+    if not 0 <= j < len(phase.constraints):
+        raise GaitoptInputError(
+            f"phase {phase.name!r} declares {len(phase.constraints)} constraint(s); no index {j}"
+        )
+    constraint = phase.constraints[j]
+    rate = rate_along(phase.flow, constraint.function)
+    n_p, n_u = len(model_cls.parameter_specs()), len(model_cls.inputs)
+    w = ca.MX.sym("w", tr.size + n_extra(boundary))
+    u, p = ca.MX.sym("u", n_u), ca.MX.sym("p", n_p)
+    x0 = phase_start(tr, w, p, k)
+    if what == "lift_off":
+        if not constraint.at_start:
+            raise GaitoptInputError(
+                f"constraint {constraint.name!r} is not declared at_start: it has no lift-off rate"
+            )
+        g = rate(x0, u, p)
+    else:
+        t_star = w[tr.size]
+        x_star = segment_function(phase.flow, disc.segments * disc.steps)(x0, u, p, t_star)
+        g = ca.vertcat(constraint.function(x_star, u, p), rate(x_star, u, p))
+    return ca.Function(f"constraint_{what}", [w, u, p], [g], ["w", "u", "p"], ["g"])
