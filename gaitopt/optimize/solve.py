@@ -426,7 +426,15 @@ def solve_problem(
     }
     result.message += structure_note
     if result.success and not disc_error <= tol:
-        result.message += f" (discretisation error {disc_error:.2g} above the target {tol:g})"
+        # Never a gait known less well than promised: the refinement did not reach ``tol``.
+        result.success, result.stable = False, None
+        result.message = (
+            f"no certified optimum: the discretisation error {disc_error:.2g} (cost and orbit "
+            f"under mesh refinement) stays above the target {tol:g} after {refinements} "
+            f"refinements; the optimum is known only to about that (cost {sol['cost']:.10g}). "
+            f"Loosen `tol` to accept it, or bound the inputs so the optimum is smoother. "
+            + result.message
+        )
     fixed_names = model.state_names
     result.minima = []
     for m in minima:
