@@ -245,12 +245,12 @@ def test_kneed_walker_clearance_boundary_brackets_the_graze(kneed, radius):
         phase = model.phases[0]
         clearance = next(c for c in phase.constraints if c.outcome == "trip")
         sol = solve_ivp(
-            lambda t, x, ph=phase, m=model: np.asarray(ph.flow(x, [], m.p)).ravel(),
+            lambda t, x, ph=phase, m=model, u=cycle.inputs: np.asarray(ph.flow(x, u, m.p)).ravel(),
             (0.0, 0.1), cycle.orbit[0].x[:, 0], method="DOP853", rtol=1e-13, atol=1e-14,
             dense_output=True,
         )  # fmt: skip
         t = np.linspace(1e-3, min(0.1, cycle.durations[0]), 40001)
-        c = np.asarray(clearance.function.map(t.size)(sol.sol(t), [], model.p)).ravel()
+        c = np.asarray(clearance.function.map(t.size)(sol.sol(t), cycle.inputs, model.p)).ravel()
         lowest.append(float(np.min(c)))
     assert lowest[0] > 0 > lowest[1]
 
@@ -266,11 +266,11 @@ def test_lift_off_rate_condition_matches_the_constraint_rate():
     cycle = gaitopt.find_limit_cycle(gaitopt.model("kneed_walker"))
     tr = transcription(type(cycle.model), cycle.discretisation, 1)
     g = constraint_condition(type(cycle.model), cycle.discretisation, 1, ("lift_off", 0, 0))
-    value = float(g(_w_of(cycle, tr), [], cycle.model.p))
+    value = float(g(_w_of(cycle, tr), cycle.inputs, cycle.model.p))
     phase = cycle.model.phases[0]
     direct = float(
         rate_along(phase.flow, phase.constraints[0].function)(
-            cycle.orbit[0].x[:, 0], [], cycle.model.p
+            cycle.orbit[0].x[:, 0], cycle.inputs, cycle.model.p
         )  # fmt: skip
     )
     assert value == pytest.approx(direct, abs=1e-12)

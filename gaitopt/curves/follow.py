@@ -407,12 +407,13 @@ class _Follower:
             return np.zeros(1), np.zeros(1)
         return bordering(self.kind, np.asarray(A, dtype=float))
 
-    def evaluate(self, y):
+    def evaluate(self, y, gradient: bool = True):
         key = (y.tobytes(), self._shift, self.b.tobytes(), self.c.tobytes(), id(self.system))
         if self._last is not None and self._last[0] == key:  # the tangent, tests, multipliers
             H, J, A = self._last[1]
-            return H.copy(), J.copy(), A.copy()
-        H, J, A = self.system.evaluate(y, self.b, self.c, self.par)
+            if not gradient or np.all(np.isfinite(J)):
+                return H.copy(), J.copy(), A.copy()
+        H, J, A = self.system.evaluate(y, self.b, self.c, self.par, gradient=gradient)
         if self._shift:
             H[self.tr.size] -= self._shift
         self._last = (key, (H.copy(), J.copy(), A.copy()))
@@ -444,9 +445,16 @@ class _Follower:
         """Newton on ``H(y) = 0`` plus one scalar constraint: ``⟨row, y − y_pred⟩ = 0``
         (pseudo-arclength, ``row = W t``) or, with ``target``, ``⟨row, y⟩ = target`` (a
         parameter held fixed).  Returns ``(y, converged, iterations)``."""
+        # The shooting rows of ∂H/∂y are exact at every iterate (they come with H from the
+        # kernels); the condition's row is refreshed only while Newton converges slowly (its
+        # gradient costs two more kernel Jacobians): a chord step in that one row.  Convergence
+        # is still tested on the exact H.
         y = y_pred.copy()
         H, J, _ = self.evaluate(y)
+        g_row = J[self.tr.size :].copy()
+        last = math.inf
         for k in range(1, self.options.max_corrector + 1):
+            J[self.tr.size :] = g_row
             if not (np.all(np.isfinite(H)) and np.all(np.isfinite(J))):
                 return y, False, k
             extra = float(row @ y) - target if target is not None else float(row @ (y - y_pred))
@@ -455,8 +463,12 @@ class _Follower:
             except np.linalg.LinAlgError:
                 return y, False, k
             y = y + dy
-            H, J, _ = self.evaluate(y)
-            small = np.max(np.abs(dy)) < 1e-9 * (1 + np.max(np.abs(y)))
+            size = float(np.max(np.abs(dy)))
+            H, J, _ = self.evaluate(y, gradient=size > 0.1 * last)
+            if np.all(np.isfinite(J[self.tr.size :])):
+                g_row = J[self.tr.size :].copy()
+            last = size
+            small = size < 1e-9 * (1 + np.max(np.abs(y)))
             if small and np.all(np.isfinite(H)) and np.max(np.abs(H)) <= self.tol:
                 return y, True, k
         return y, False, self.options.max_corrector
@@ -469,7 +481,7 @@ class _Follower:
 
     # -- points ---------------------------------------------------------------------------
     def multipliers_at(self, y: np.ndarray) -> np.ndarray:
-        _, _, A = self.evaluate(y)
+        _, _, A = self.evaluate(y, gradient=False)
         return np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
 
     def tests_at(self, y: np.ndarray, t: np.ndarray) -> dict[str, float]:
@@ -670,7 +682,8 @@ class _Follower:
                 self.stop = f"reached {self.paths[1].name} = {self.to:.10g}"
                 return
             y, t, tests = y_new, t_new, new_tests
-            h = min(opts.max_step, h * 1.5) if iterations <= 3 else h / 2 if iterations >= 6 else h
+            # chord correctors take one iteration more than Newton (see correct): grow at ≤ 4
+            h = min(opts.max_step, h * 1.5) if iterations <= 4 else h / 2 if iterations >= 7 else h
         self.stop = f"stopped after {opts.max_points} points"
 
     def _where(self, y: np.ndarray) -> str:

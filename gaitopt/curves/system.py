@@ -361,9 +361,17 @@ class AugmentedSystem:
         return n_extra(self.boundary)
 
     def evaluate(
-        self, y: np.ndarray, b: np.ndarray, c: np.ndarray, par: Parametrisation
+        self,
+        y: np.ndarray,
+        b: np.ndarray,
+        c: np.ndarray,
+        par: Parametrisation,
+        gradient: bool = True,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``H(y)``, ``∂H/∂y`` and the return map's Jacobian ``A`` at ``y``."""
+        """``H(y)``, ``∂H/∂y`` and the return map's Jacobian ``A`` at ``y``; with ``gradient``
+        False the condition's row of ``∂H/∂y`` may be left as NaN where that saves work (the
+        kernel path: two kernel evaluations fewer), for a corrector that reuses an older row.
+        """
         N = self.tr.size
         wz, w, ell = y[:-2], y[:N], y[-2:]
         lam = ell * par.scale
@@ -371,7 +379,7 @@ class AugmentedSystem:
         ev = self.tr.evaluate(w, u, p)  # compiled kernels where they exist
         F_ell = (ev.F_p @ par.K + ev.F_u @ par.D) * par.scale  # ∂F/∂ℓ = (F_p K + F_u D) diag(s)
         if self.kernel_path:
-            g, grad, A = self._bordered_from_kernels(w, u, p, ev, F_ell, b, c, par)
+            g, grad, A = self._bordered_from_kernels(w, u, p, ev, F_ell, b, c, par, gradient)
         else:
             g, grad, A = self.function(wz, ell, b, c, *par.inputs().values())
         g = np.asarray(g, dtype=float).ravel()
@@ -382,7 +390,7 @@ class AugmentedSystem:
         J = np.vstack([F_block, np.asarray(grad, dtype=float).reshape(g.size, y.size)])
         return H, J, np.asarray(A, dtype=float).reshape(self.tr.m, self.tr.m)
 
-    def _bordered_from_kernels(self, w, u, p, ev, F_ell, b, c, par):
+    def _bordered_from_kernels(self, w, u, p, ev, F_ell, b, c, par, gradient=True):
         """``g``, ``∂g/∂y`` and ``A`` of a PD or LP curve from the compiled shooting Jacobian.
 
         ``g`` from the bordered system ``[M b; cᵀ 0] [v; g] = [0; 1]`` with ``M = A ± I`` (``A``
@@ -407,6 +415,8 @@ class AugmentedSystem:
         vg = np.linalg.solve(K, rhs)
         omega_g = np.linalg.solve(K.T, rhs)
         v, g, omega = vg[:m], vg[m], omega_g[:m]
+        if not gradient:
+            return g, np.full(tr.size + self.extra + 2, np.nan), A
         dw = np.concatenate([v, -GzGs @ v])
         psi = np.concatenate([-np.linalg.solve(G_z.T, P_z.T @ omega) if n_g else [], omega])
         eps = 1e-5 * (1.0 + np.max(np.abs(w))) / max(np.max(np.abs(dw)), 1e-300)
