@@ -180,6 +180,14 @@ class _PhaseFunctions:
             for tr in phase.transitions
         ] + [None] * len(self.constraints)
         self._jac = None
+        self._events = [tr.guard for tr in phase.transitions]
+        self._events += [c.function for c in self.constraints]
+
+    def step_function(self) -> ca.Function:
+        """One DOP853 step with this phase's event functions (:mod:`gaitopt.dop853`)."""
+        from .dop853 import step_function
+
+        return step_function(self.phase.flow, self._events, _CHECKS_PER_STEP)
 
     @property
     def events(self) -> int:
@@ -544,10 +552,17 @@ def _integrate_phase(funcs: _PhaseFunctions, solver_cls, t0, x0, rtol, atol, max
     from scipy.integrate import OdeSolution
     from scipy.optimize import brentq
 
-    kwargs = {"jac": funcs.jac} if method in ("Radau", "LSODA") else {}
-    solver = solver_cls(funcs.rhs, t0, x0, t0 + max_time, rtol=rtol, atol=atol, **kwargs)
     n_tr = funcs.events
-    values = np.array([funcs.signed_guard(k, x0) for k in range(n_tr)])
+    if method == "DOP853" and funcs._drive is None:  # one CasADi call per step (same method)
+        from .dop853 import CompiledDOP853
+
+        solver = CompiledDOP853(funcs.rhs, funcs.step_function(), funcs.u, funcs.p, t0, x0,
+                                t0 + max_time, rtol=rtol, atol=atol)  # fmt: skip
+    else:
+        kwargs = {"jac": funcs.jac} if method in ("Radau", "LSODA") else {}
+        solver = solver_cls(funcs.rhs, t0, x0, t0 + max_time, rtol=rtol, atol=atol, **kwargs)
+    directions = np.array(funcs._directions, dtype=float)[:, None]
+    values = np.array([funcs.signed_guard(k, x0) for k in range(n_tr)], dtype=float)
     armed = values < -_ARM
     short = _short_excursion(funcs, x0, armed)
     if short is not None:
@@ -561,12 +576,30 @@ def _integrate_phase(funcs: _PhaseFunctions, solver_cls, t0, x0, rtol, atol, max
         t_old, t_new = solver.t_old, solver.t
         dense = solver.dense_output()
         grid = np.linspace(t_old, t_new, _CHECKS_PER_STEP + 1)
-        states = [dense(tt) for tt in grid[1:-1]] + [solver.y]
+        compiled = getattr(solver, "event_values", None)
+        if compiled is not None:  # the event functions at the check points, from the step call
+            signed = directions * compiled
+        else:
+            states = [dense(tt) for tt in grid[1:-1]] + [solver.y]
+            signed = np.array([[funcs.signed_guard(k, x) for x in states] for k in range(n_tr)])
         best = None
-        for k in range(n_tr):
+        signed = np.reshape(signed, (n_tr, _CHECKS_PER_STEP))
+        before = np.concatenate([values[:, None], signed[:, :-1]], axis=1)
+        crossing = bool(np.any((before < 0) & (signed >= 0)))
+        if not crossing:  # no sign change in this step: only the arming and the last values
+            armed |= np.any(signed < -_ARM, axis=1)
+            values[:] = signed[:, -1]
+        for k in range(n_tr if crossing else 0):
             previous, was_armed = values[k], armed[k]
-            for j, x in enumerate(states, start=1):
-                current = funcs.signed_guard(k, x)
+            for j in range(1, _CHECKS_PER_STEP + 1):
+                current = float(signed[k, j - 1])
+                if was_armed and previous < 0 <= current and compiled is not None:
+                    # confirm on the dense output itself (the bracket brentq is given)
+                    ends = [
+                        funcs.signed_guard(k, dense(grid[j - 1])),
+                        funcs.signed_guard(k, dense(grid[j]) if j < _CHECKS_PER_STEP else solver.y),
+                    ]
+                    previous, current = ends
                 if was_armed and previous < 0 <= current:
                     t_hit = brentq(
                         lambda tt, k=k, dense=dense: funcs.signed_guard(k, dense(tt)),

@@ -85,3 +85,33 @@ def test_cache_compiles_once_and_reuses(monkeypatch, tmp_path, capsys):
     second = ModelKernels(type(model))
     assert second.compiled and sorted(tmp_path.glob("*.so")) == libraries
     assert "compiling" not in capsys.readouterr().err
+
+
+def test_index_loads_without_building_and_ignores_a_stale_entry(monkeypatch, tmp_path):
+    # A warm start finds the library in the index under the source key and builds nothing; an
+    # entry whose library is gone is ignored and rewritten (the library compiled again).
+    monkeypatch.setenv("GAITOPT_CACHE", str(tmp_path))
+    import gaitopt.kernels as kernels
+
+    cls = type(gaitopt.model("vanderpol"))
+    first = ModelKernels(cls, verbose=False)
+    if not first.compiled:  # no C compiler on this machine: no index either
+        assert not (tmp_path / "index").exists()
+        return
+    assert len(list((tmp_path / "index").glob("*.json"))) == 1
+
+    def no_build(model_cls):
+        raise AssertionError("the index was not used")
+
+    monkeypatch.setattr(kernels, "kernel_functions", no_build)
+    second = ModelKernels(cls, verbose=False)
+    assert second.compiled and second.n == first.n
+    x = np.array([1.0, 0.5])
+    for a, b in zip(first.end[0](x, [], cls().p), second.end[0](x, [], cls().p), strict=True):
+        assert np.array_equal(np.asarray(a), np.asarray(b))  # the same library: bit for bit
+    monkeypatch.undo()
+    monkeypatch.setenv("GAITOPT_CACHE", str(tmp_path))
+    for library in tmp_path.glob("*.so"):
+        library.unlink()
+    third = ModelKernels(cls, verbose=False)
+    assert third.compiled and len(list(tmp_path.glob("*.so"))) == 1

@@ -17,7 +17,7 @@ from functools import lru_cache
 
 import casadi as ca
 
-from .cache import cache_dir, load
+from .cache import cache_dir, load, source_key
 from .symbolic import kernel_functions
 
 __all__ = ["ModelKernels", "model_kernels", "phase_function", "cache_dir"]
@@ -27,14 +27,17 @@ class ModelKernels:
     """The kernels of one model class: ``lift`` and, per phase, ``fold`` and ``end``."""
 
     def __init__(self, model_cls, *, verbose: bool = True):
-        functions = kernel_functions(model_cls)
         name = f"gaitopt_{model_cls.__name__.lower()}"
-        loaded = load(name, functions, verbose=verbose)
-        self.compiled = loaded is not functions
+        loaded, self.compiled = load(
+            name,
+            lambda: kernel_functions(model_cls),
+            verbose=verbose,
+            key=source_key(name, model_cls),
+        )
         self.lift = loaded[0]
         self.fold = loaded[1::2]
         self.end = loaded[2::2]
-        self.n = [f.size1_in(0) for f in functions[1::2]]
+        self.n = [f.size1_in(0) for f in self.fold]
         self.n_u = len(model_cls.inputs)
         self.n_p = len(model_cls.parameter_specs())
 

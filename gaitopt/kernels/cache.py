@@ -7,6 +7,14 @@ and the flags; so a changed model, CasADi or compiler gets a new library and a s
 never loaded.  Two processes compiling the same kernel at once are safe: each compiles to its own
 temporary file in the cache directory and renames it into place atomically (:func:`os.replace`).
 
+Finding a library by that hash means generating the C source, which takes longer than loading the
+library (0.1–0.6 s per model class).  So each library is also listed in an index under a *source
+key*: a hash of gaitopt's own source files, the model class's module, the CasADi version, the
+compiler and the flags, which determine the generated code as well.  A warm start looks the
+library up there and builds nothing.  Only model classes defined inside the ``gaitopt`` package
+use the index (a model defined elsewhere may depend on code the key does not see); an index entry
+whose library is missing or does not load is ignored and rewritten.
+
 The compiler is ``$GAITOPT_CC`` (default ``gcc``).  Without one (or where compiling fails, or with
 ``GAITOPT_COMPILE=0``) the same functions run in CasADi's interpreter: slower, identical results.
 The first use of a model class says on stderr that it is compiling (a few seconds, once).
@@ -15,19 +23,25 @@ The first use of a model class says on stderr that it is compiling (a few second
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
+from collections.abc import Callable
+from functools import lru_cache
 from pathlib import Path
 
 import casadi as ca
 
-__all__ = ["cache_dir", "compiler", "load", "FLAGS"]
+__all__ = ["cache_dir", "compiler", "load", "source_key", "FLAGS"]
 
 #: Compiler flags: -O1 compiles the step kernels in seconds and runs them within ~10 % of -O3.
 FLAGS = ("-O1", "-shared", "-fPIC")
+#: Seconds a compile may take before the functions are interpreted instead.
+_COMPILE_TIMEOUT = 600
 
 
 def cache_dir() -> Path:
@@ -53,13 +67,79 @@ def _key(source: str, cc: str) -> str:
     return hashlib.sha256(ident.encode()).hexdigest()[:24]
 
 
-def load(name: str, functions: list[ca.Function], *, verbose: bool = True) -> list[ca.Function]:
+@lru_cache(maxsize=1)
+def _package_digest() -> str:
+    """SHA-256 of every ``.py`` file of the installed gaitopt package (paths and contents)."""
+    root = Path(__file__).resolve().parents[1]
+    digest = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        digest.update(str(path.relative_to(root)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def source_key(name: str, model_cls: type) -> str | None:
+    """The index key of a model class's kernels, or None where the index is not used (a model
+    defined outside the gaitopt package, or no compiler)."""
+    cc = compiler()
+    if cc is None or not model_cls.__module__.startswith("gaitopt."):
+        return None
+    stat = os.stat(cc)
+    ident = "\n".join(
+        [name, model_cls.__module__, model_cls.__qualname__, _package_digest(), ca.__version__,
+         cc, str(stat.st_size), str(stat.st_mtime_ns), " ".join(FLAGS)]
+    )  # fmt: skip
+    return hashlib.sha256(ident.encode()).hexdigest()[:24]
+
+
+def _from_index(key: str) -> list[ca.Function] | None:
+    entry_path = cache_dir() / "index" / f"{key}.json"
+    try:
+        entry = json.loads(entry_path.read_text())
+        library = cache_dir() / entry["library"]
+        if not library.exists():
+            return None
+        return [ca.external(f, str(library)) for f in entry["functions"]]
+    except (OSError, ValueError, KeyError, TypeError, RuntimeError):
+        return None
+
+
+def _write_index(key: str, library: Path, names: list[str]) -> None:
+    directory = cache_dir() / "index"
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(suffix=".json", prefix=".index_", dir=directory)
+        with os.fdopen(fd, "w") as fh:
+            json.dump({"library": library.name, "functions": names}, fh)
+        os.replace(tmp, directory / f"{key}.json")  # atomic, as for the libraries
+    except OSError:
+        pass  # no index: the next start generates the source to find the library
+
+
+def load(
+    name: str,
+    functions: list[ca.Function] | Callable[[], list[ca.Function]],
+    *,
+    verbose: bool = True,
+    key: str | None = None,
+) -> tuple[list[ca.Function], bool]:
     """The ``functions`` compiled into one shared library (from the cache when present), loaded
     with ``ca.external``; the interpreted functions themselves where there is no compiler or
-    compiling fails."""
+    compiling fails.
+
+    ``functions`` may be a callable that builds them, called only when needed: with ``key``
+    (from :func:`source_key`) a library listed in the index is loaded without building them.
+    Returns the functions and whether they are compiled.
+    """
+    if key is not None:
+        found = _from_index(key)
+        if found is not None:
+            return found, True
+    if callable(functions):
+        functions = functions()
     cc = compiler()
     if cc is None:
-        return functions
+        return functions, False
     gen = ca.CodeGenerator(f"{name}.c", {"with_header": False})
     for f in functions:
         gen.add(f)
@@ -69,18 +149,21 @@ def load(name: str, functions: list[ca.Function], *, verbose: bool = True) -> li
     if not library.exists():
         try:
             _compile(source, cc, library, name, verbose)
-        except (OSError, subprocess.CalledProcessError) as exc:
+        except (OSError, subprocess.SubprocessError) as exc:
             if verbose:
                 print(
                     f"gaitopt: could not compile {name} ({exc}); interpreting it", file=sys.stderr
                 )
-            return functions
+            return functions, False
     try:
-        return [ca.external(f.name(), str(library)) for f in functions]
+        loaded = [ca.external(f.name(), str(library)) for f in functions]
     except RuntimeError as exc:  # a corrupt library: interpret (and let a later run rebuild)
         if verbose:
             print(f"gaitopt: could not load {library} ({exc}); interpreting", file=sys.stderr)
-        return functions
+        return functions, False
+    if key is not None:
+        _write_index(key, library, [f.name() for f in functions])
+    return loaded, True
 
 
 def _compile(source: str, cc: str, library: Path, name: str, verbose: bool) -> None:
@@ -93,9 +176,22 @@ def _compile(source: str, cc: str, library: Path, name: str, verbose: bool) -> N
     try:
         with os.fdopen(fd, "w") as fh:
             fh.write(source)
-        subprocess.run(
-            [cc, *FLAGS, tmp_c, "-o", tmp_so, "-lm"], check=True, capture_output=True, timeout=600
+        # Its own process group: on a timeout the compiler proper (cc1) is ended with the driver,
+        # not left running as an orphan.
+        proc = subprocess.Popen(
+            [cc, *FLAGS, tmp_c, "-o", tmp_so, "-lm"],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            start_new_session=True,
         )
+        try:
+            out, err = proc.communicate(timeout=_COMPILE_TIMEOUT)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+            raise
+        if proc.returncode:
+            raise subprocess.CalledProcessError(proc.returncode, cc, out, err)
         os.replace(tmp_so, library)  # atomic: a concurrent compile of the same key is harmless
     finally:
         for path in (tmp_c, tmp_so):

@@ -41,8 +41,6 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-from scipy.integrate import solve_ivp
-from scipy.optimize import root
 
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..mechanics import kinetic_energy, lagrange_acceleration, potential_energy, rigid_link
@@ -264,6 +262,8 @@ class BallisticWalker(HybridModel):
         return float(x[0]), float(x[1]), float(x[2])
 
     def _integrate(self, rates, time, fun, dense: bool = False):
+        from scipy.integrate import solve_ivp  # on first use: 0.4 s of every import otherwise
+
         x0 = np.r_[self.toe_off_angles(), rates]
         sol = solve_ivp(
             lambda t, x: np.asarray(fun(x)).ravel(),
@@ -297,6 +297,8 @@ class BallisticWalker(HybridModel):
         fun, pts = self._functions()
         a = self.alpha
         _, thigh0, shank0 = self.toe_off_angles()
+        from scipy.optimize import root  # on first use
+
         rough = np.array([2 * a / time, (a - thigh0) / time, (a - shank0) / time])
         if guess is None or not np.all(np.isfinite(guess)):
             guess = rough

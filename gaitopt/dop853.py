@@ -1,0 +1,190 @@
+"""SciPy's DOP853 with each step evaluated in one CasADi call: the stepper of the verification.
+
+:class:`scipy.integrate.DOP853` (Dormand & Prince's 8(5,3) pair; Hairer, Nørsett & Wanner,
+*Solving ODEs I*, §II.10) spends most of a short simulation in Python: 12 right-hand-side calls
+per step, 3 more for the dense output, each through several Python frames.  :class:`CompiledDOP853`
+keeps SciPy's class — its initial step, error norm and step-size control, its
+``Dop853DenseOutput`` — and replaces only the arithmetic of one step by one call of a CasADi
+function built from the phase's flow with SciPy's own coefficients: the new state and rate, both
+error estimates, the dense-output coefficients, and the phase's event functions (guards and
+unilateral constraints) at the step's interior check points and its end.  Same method, same
+steps, same results to rounding; about 4× less time per step.
+
+The flow must be autonomous (``ẋ = f(x, u, p)``, as every phase's is) with ``u`` and ``p``
+constant over the phase.  Functions are built once per phase and kept (about 10–40 ms each).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+from scipy.integrate import DOP853
+from scipy.integrate._ivp import dop853_coefficients as _dc
+from scipy.integrate._ivp.rk import Dop853DenseOutput
+
+__all__ = ["CompiledDOP853", "step_function"]
+
+# SciPy's step-size control (scipy/integrate/_ivp/rk.py)
+_SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
+_N = _dc.N_STAGES  # 12
+
+_CACHE: dict[tuple[int, int, int], tuple[object, ca.Function]] = {}
+
+
+def step_function(flow: ca.Function, events: list[ca.Function], checks: int) -> ca.Function:
+    """One DOP853 step of ``ẋ = flow(x, u, p)`` with ``events`` at ``checks`` points.
+
+    Inputs ``(y, f, h, fractions, u, p, tol)``: the state, its rate, the step (s), the interior
+    check points as fractions of the step (``checks − 1`` of them), ``tol = (rtol, atol)``.
+    Outputs ``(y_new, f_new, error_norm, F, G)``: SciPy's error norm of the step (accepted below
+    1), ``F`` the dense-output coefficients (n × 7, SciPy's ``F`` transposed), ``G`` the event
+    functions (rows) at the interior points and at ``y_new`` (columns).
+    """
+    key = (id(flow), hash(tuple(id(e) for e in events)), checks)
+    hit = _CACHE.get(key)
+    if hit is not None:
+        return hit[1]
+    n = flow.size1_in(0)
+    y, f0 = ca.MX.sym("y", n), ca.MX.sym("f", n)
+    h = ca.MX.sym("h")
+    frac = ca.MX.sym("fractions", checks - 1)
+    u, p = ca.MX.sym("u", flow.size1_in(1)), ca.MX.sym("p", flow.size1_in(2))
+    A, B = _dc.A, _dc.B
+    K = [f0]
+    for s in range(1, _N):  # rk_step
+        dy = sum((A[s, j] * K[j] for j in range(s) if A[s, j] != 0), ca.MX.zeros(n))
+        K.append(flow(y + h * dy, u, p))
+    y_new = y + h * sum((B[j] * K[j] for j in range(_N) if B[j] != 0), ca.MX.zeros(n))
+    f_new = flow(y_new, u, p)
+    K.append(f_new)
+    e5 = sum((_dc.E5[j] * K[j] for j in range(_N + 1) if _dc.E5[j] != 0), ca.MX.zeros(n))
+    e3 = sum((_dc.E3[j] * K[j] for j in range(_N + 1) if _dc.E3[j] != 0), ca.MX.zeros(n))
+    for s in range(_N + 1, _dc.N_STAGES_EXTENDED):  # DOP853._dense_output_impl
+        dy = sum((A[s, j] * K[j] for j in range(s) if A[s, j] != 0), ca.MX.zeros(n))
+        K.append(flow(y + h * dy, u, p))
+    delta = y_new - y
+    F = [delta, h * f0 - delta, 2 * delta - h * (f_new + f0)]
+    for row in _dc.D:
+        F.append(h * sum((row[j] * K[j] for j in range(len(K)) if row[j] != 0), ca.MX.zeros(n)))
+    G = []
+    for i in range(checks - 1):  # Dop853DenseOutput._call_impl at each fraction
+        x = frac[i]
+        z = ca.MX.zeros(n)
+        for k, Fk in enumerate(reversed(F)):
+            z = (z + Fk) * (x if k % 2 == 0 else 1 - x)
+        state = z + y
+        G.append(ca.vertcat(*(e(state, u, p)[0] for e in events)))
+    G.append(ca.vertcat(*(e(y_new, u, p)[0] for e in events)))
+    # DOP853._estimate_error_norm, scaled by atol + max(|y|, |y_new|)·rtol
+    tol = ca.MX.sym("tol", 2)  # rtol, atol
+    scale = tol[1] + ca.fmax(ca.fabs(y), ca.fabs(y_new)) * tol[0]
+    n5, n3 = ca.sumsqr(e5 / scale), ca.sumsqr(e3 / scale)
+    denominator = ca.fmax(n5 + 0.01 * n3, 1e-300)  # both 0: the norm is 0
+    error_norm = ca.fabs(h) * n5 / ca.sqrt(denominator * n)
+    fn = ca.Function(
+        "dop853_step",
+        [y, f0, h, frac, u, p, tol],
+        [y_new, f_new, error_norm, ca.horzcat(*F), ca.horzcat(*G)],
+    )
+    try:
+        fn = fn.expand()  # SX: a flat instruction list, several times faster to evaluate
+    except RuntimeError:
+        pass
+    _CACHE[key] = ((flow, events), fn)  # keep the keyed objects alive (ids stay unique)
+    return fn
+
+
+class _Call:
+    """``step_function``'s evaluation through preallocated buffers (``Function.buffer``)."""
+
+    def __init__(self, fn: ca.Function, u: np.ndarray, p: np.ndarray, rtol, atol):
+        n, m, c = fn.size1_in(0), fn.size1_out(4), fn.size2_out(4)
+        self.y, self.f = np.zeros(n), np.zeros(n)
+        self.h, self.frac = np.zeros(1), np.zeros(c - 1)
+        self.u = np.ascontiguousarray(u, dtype=float).ravel().copy()
+        self.p = np.ascontiguousarray(p, dtype=float).ravel().copy()
+        self.tol = np.array([rtol, atol], dtype=float)
+        self.y_new, self.f_new, self.norm = np.zeros(n), np.zeros(n), np.zeros(1)
+        self.F = np.zeros(n * 7)  # column-major n × 7
+        self.G = np.zeros(max(m * c, 1))  # column-major m × c
+        self.m, self.c, self.n = m, c, n
+        self._buffer, self._trigger = fn.buffer()
+        for i, a in enumerate((self.y, self.f, self.h, self.frac, self.u, self.p, self.tol)):
+            self._buffer.set_arg(i, memoryview(a))
+        for i, a in enumerate((self.y_new, self.f_new, self.norm, self.F, self.G)):
+            self._buffer.set_res(i, memoryview(a))
+
+    def __call__(self, y, f, h) -> float:
+        self.y[:] = y
+        self.f[:] = f
+        self.h[0] = h
+        self._trigger()
+        return float(self.norm[0])
+
+
+class CompiledDOP853(DOP853):
+    """:class:`scipy.integrate.DOP853` with each step (and its dense output and the event
+    functions at the check points) evaluated in one CasADi call.
+
+    Parameters
+    ----------
+    fun : callable
+        ``fun(t, x)``, the flow for SciPy's start-up (initial step selection).
+    step : casadi.Function
+        From :func:`step_function` for the same flow.
+    u, p : numpy.ndarray
+        The phase's input and parameters, constant over the phase.
+    t0, y0, t_bound, rtol, atol, max_step
+        As for :class:`scipy.integrate.DOP853`.
+
+    After each step, :attr:`event_values` holds the event functions (rows) at the interior
+    check points ``t_old + (t − t_old)·k/checks`` and at ``t`` (columns).
+    """
+
+    def __init__(self, fun, step: ca.Function, u, p, t0, y0, t_bound, **options):
+        super().__init__(fun, t0, y0, t_bound, **options)
+        self._call = _Call(step, u, p, self.rtol, self.atol)
+        self._call.frac[:] = np.arange(1, self._call.c) / self._call.c
+        self._F = None
+        self.event_values = None
+
+    def _step_impl(self):  # scipy.integrate._ivp.rk.RungeKutta._step_impl, one call per try
+        t, y = self.t, self.y
+        min_step = 10 * np.abs(np.nextafter(t, self.direction * np.inf) - t)
+        h_abs = min(max(self.h_abs, min_step), self.max_step)
+        call, exponent = self._call, self.error_exponent
+        step_rejected = False
+        while True:
+            if h_abs < min_step:
+                return False, self.TOO_SMALL_STEP
+            h = h_abs * self.direction
+            t_new = t + h
+            if self.direction * (t_new - self.t_bound) > 0:
+                t_new = self.t_bound
+            h = t_new - t
+            h_abs = np.abs(h)
+            error_norm = call(y, self.f, h)
+            if error_norm < 1:
+                factor = (
+                    _MAX_FACTOR
+                    if error_norm == 0
+                    else min(_MAX_FACTOR, _SAFETY * error_norm**exponent)
+                )
+                if step_rejected:
+                    factor = min(1, factor)
+                h_abs *= factor
+                break
+            h_abs *= max(_MIN_FACTOR, _SAFETY * error_norm**exponent)
+            step_rejected = True
+        self.h_previous = h
+        self.y_old = y
+        self.t = t_new
+        self.y = call.y_new.copy()
+        self.h_abs = h_abs
+        self.f = call.f_new.copy()
+        self._F = call.F.reshape(7, call.n).copy()  # column-major n × 7 = row-major 7 × n
+        self.event_values = call.G[: call.m * call.c].reshape(call.c, call.m).T.copy()
+        return True, None
+
+    def _dense_output_impl(self):
+        return Dop853DenseOutput(self.t_old, self.t, self.y_old, self._F)
