@@ -709,14 +709,14 @@ class _Follower:
     def _boundary(self, y, t, h_fail, reason, locate=True) -> None:
         """Bisect between the last certified point and the failure; record a boundary."""
         lo, hi = 0.0, h_fail
-        last = self.cycles[-1]
+        last, y_lo = self.cycles[-1], y
         if locate:
             while hi - lo > 1e-14:
                 h = 0.5 * (lo + hi)
                 y_mid, ok, _ = self.correct(y + h * t, t)
                 cycle = self.certified(y_mid) if ok else None
                 if cycle is not None and cycle.success:
-                    lo, last = h, cycle
+                    lo, last, y_lo = h, cycle, self.y_last
                 else:
                     hi = h
                     if cycle is not None:
@@ -726,6 +726,10 @@ class _Follower:
                 if abs(lam_hi - lam_lo) < _LOCATE_TOL:
                     break
         if last is not self.cycles[-1]:
+            # Special points between the last accepted point and the boundary's last gait (a
+            # period doubling just before the end would otherwise be stepped over).
+            tests = _test_functions(self.cycles[-1].multipliers)
+            self._special_points_between(y, t, y_lo, tests, last, h_total=lo)
             self.cycles.append(last)
         lam = float(getattr(last.model, self.param))
         growth = last.period / self.first.period

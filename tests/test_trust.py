@@ -166,3 +166,16 @@ def test_lost_gait_is_reported_with_where_and_why():
     assert not cycle.success
     assert "--starts" in cycle.message or "closed form" in cycle.message
     assert cycle.as_dict()["stable"] is None
+
+
+def test_a_period_doubling_just_before_a_boundary_is_not_stepped_over():
+    # Curved feet R = 0.1 m: the branch's last regular step once jumped from a multiplier of
+    # −0.90 straight to the clearance boundary (−1.18) and reported no period doubling.
+    # Independent value: the two-parameter PD curve through R = 0.1 m (gaitopt.curves, the
+    # extended system with det(A + I) = 0) puts it at slope 0.11604564 rad; 1e-7.
+    model = gaitopt.model("kneed_walker", foot_radius=0.1)
+    branch = gaitopt.continuation(model, "slope", to=0.13, cascade=False)
+    kinds = [sp.kind for sp in branch.special_points]
+    assert kinds == ["PD", "boundary"]
+    assert branch.special_points[0].param == pytest.approx(0.11604564, abs=1e-7)
+    assert branch.special_points[0].param < branch.special_points[1].param
