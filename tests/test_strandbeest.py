@@ -206,3 +206,50 @@ def test_gait_matches_the_energy_and_impact_closed_form(walker):
     assert slope == pytest.approx(cf["multiplier"], abs=1e-6)
     # The model's own affine energy map (its energy functions and resets) agrees too.
     assert math.sqrt(walker.energy_map_fixed_point()) == pytest.approx(x0, rel=1e-10)
+
+
+def test_support_series_match_the_exact_linkage_off_grid():
+    # The flow, guards and resets use Chebyshev series of each support phase's M_s, M_s', the
+    # centre of mass's rate and the guards and impact ratios (support_series).  Against the
+    # closed-form dyads of all twelve legs (_support_exact) at 101 points between the
+    # interpolation nodes and the fit's own check points: relative error below 1e-10 (each
+    # quantity against its largest magnitude on the interval; the guards, differences of
+    # foot heights, against GUARD_SCALE = 0.1 m).
+    import casadi as ca
+
+    from gaitopt.models import strandbeest as sb
+
+    feet, _ = sb.contact_sequence()
+    theta = ca.SX.sym("theta")
+    for k in range(len(feet)):
+        _, a, b, _ = sb.support_series(k)
+        series = sb._series(theta, k)
+        approx = ca.Function("approx", [theta], [ca.vertcat(*series.values())])
+        thetas = np.linspace(a, b, 101) + 0.37 * (b - a) / 101  # off the Chebyshev nodes
+        thetas = thetas[thetas < b]
+        exact = np.asarray(sb._support_exact(k).map(thetas.size)(thetas.reshape(1, -1)))
+        got = np.asarray(approx.map(thetas.size)(thetas.reshape(1, -1)))
+        scale = np.max(np.abs(exact), axis=1)
+        for q in ("guard", "guard_back"):
+            i = sb.SERIES_QUANTITIES.index(q)
+            scale[i] = max(scale[i], sb.GUARD_SCALE)
+        error = np.max(np.abs(got - exact), axis=1) / scale
+        assert np.all(error < 1e-10), (k, dict(zip(sb.SERIES_QUANTITIES, error, strict=True)))
+
+
+def test_shooting_finds_the_closed_form_gait(walker):
+    # Multiple shooting of the registered model (series flow) against the energy-plus-impact
+    # closed form (rootfinder geometry, Gauss–Legendre period): θ̇* = 6.223232504417 rad/s,
+    # multiplier 0.97125350499, period 0.164696781280 s at slope 0.02 rad, each to 1e-9.
+    import gaitopt
+
+    cf = walker.closed_form()
+    cycle = gaitopt.find_limit_cycle(gaitopt.model("strandbeest"))
+    assert cycle.success and cycle.verified, cycle.message
+    assert cycle.fixed_point["theta_dot"] == pytest.approx(cf["theta_dot"], abs=1e-9)
+    (multiplier,) = np.asarray(cycle.multipliers)
+    assert multiplier.real == pytest.approx(cf["multiplier"], abs=1e-9)
+    assert cycle.period == pytest.approx(cf["period"], abs=1e-9)
+    assert cf["theta_dot"] == pytest.approx(6.223232504417, abs=1e-12)
+    assert cf["multiplier"] == pytest.approx(0.97125350499, abs=1e-11)
+    assert cf["period"] == pytest.approx(0.164696781280, abs=1e-12)

@@ -50,10 +50,8 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from scipy.optimize import brentq
 
 from ..hybrid import Constraint, HybridModel, Phase, Section, Symbols, Transition
-from ..linkage import SIX_PAIR_PHASES, JansenLinkage, closed_form_joints
 from ..parameters import parameter
 
 __all__ = ["Strandbeest", "contact_sequence", "RODS"]
@@ -76,12 +74,20 @@ _PERIOD = math.pi / 3  # the six pairs' envelope repeats every π/3 (relabelling
 _DENSITY = 0.476  # kg/m, Deits' PVC (Drake: 0.476212462)
 
 
+def _linkage():
+    """:mod:`gaitopt.linkage`, imported on first use (it imports SciPy's optimisers, which
+    ``import gaitopt`` does not need)."""
+    from .. import linkage
+
+    return linkage
+
+
 # -- geometry and inertia of the machine ---------------------------------------------------------
 @lru_cache(maxsize=1)
 def _leg() -> ca.Function:
     """``leg(θ) -> 2×8`` points of one leg at its holy numbers (m, relative to the crank axle)."""
     t = ca.SX.sym("t")
-    pts = closed_form_joints(t, ca.DM(JansenLinkage().p))
+    pts = _linkage().closed_form_joints(t, ca.DM(_linkage().JansenLinkage().p))
     return ca.Function("leg", [t], [ca.horzcat(*[pts[n] for n in _POINTS])])
 
 
@@ -93,7 +99,7 @@ def _leg_terms() -> ca.Function:
     t = ca.SX.sym("t")
     pts = _leg()(t)
     d_pts = ca.jacobian(ca.vec(pts), t).reshape((2, 8))
-    lengths = JansenLinkage().params
+    lengths = _linkage().JansenLinkage().params
     S, M_rel, moment = ca.SX.zeros(2, 1), ca.SX(0), ca.SX.zeros(2, 1)
     for p_name, q_name, letter in RODS:
         m_r = lengths[letter]
@@ -114,13 +120,13 @@ def _leg_terms() -> ca.Function:
 
 def _leg_mass() -> float:
     """Mass of one leg's ten rods per unit density (m)."""
-    lengths = JansenLinkage().params
+    lengths = _linkage().JansenLinkage().params
     return sum(lengths[letter] for _, _, letter in RODS)
 
 
 def _pair_extra_mass() -> float:
     """Crank m and frame rods 2a and l of one pair, per unit density (m)."""
-    lengths = JansenLinkage().params
+    lengths = _linkage().JansenLinkage().params
     return lengths["m"] + 2 * lengths["a"] + lengths["l"]
 
 
@@ -138,7 +144,7 @@ def _machine() -> ca.Function:
     M_rel, dM_rel = ca.MX(0), ca.MX(0)
     mom, dmom, ddmom = ca.MX.zeros(2, 1), ca.MX.zeros(2, 1), ca.MX.zeros(2, 1)
     for mirror in (False, True):
-        for ph in SIX_PAIR_PHASES:
+        for ph in _linkage().SIX_PAIR_PHASES:
             t = math.pi - theta - ph if mirror else theta + ph
             F, dF, ddF, S_, dS_, M_, dM_, m0, m1, m2 = leg(t)
             if mirror:  # positions reflect; each θ-derivative also changes sign (t = π − θ − φ)
@@ -150,9 +156,10 @@ def _machine() -> ca.Function:
             feet[2].append(ddF)
             S, dS, M_rel, dM_rel = S + S_, dS + dS_, M_rel + M_, dM_rel + dM_
             mom, dmom, ddmom = mom + m0, dmom + m1, ddmom + m2
-    lengths = JansenLinkage().params
+    lengths = _linkage().JansenLinkage().params
     a, l, m = lengths["a"], lengths["l"], lengths["m"]  # noqa: E741
-    for ph in SIX_PAIR_PHASES:  # each pair's crank (axle to pin, a uniform rod) and its frame
+    # each pair's crank (axle to pin, a uniform rod) and its frame
+    for ph in _linkage().SIX_PAIR_PHASES:
         u = ca.vertcat(ca.cos(theta + ph), ca.sin(theta + ph))
         du = ca.vertcat(-ca.sin(theta + ph), ca.cos(theta + ph))
         S, dS = S + m * (m * du) / 2, dS - m * (m * u) / 2
@@ -171,6 +178,114 @@ def _feet() -> ca.Function:
     t = ca.MX.sym("t")
     out = _machine()(t)
     return ca.Function("feet", [t], [out[0], out[1]])
+
+
+# -- the support phases' functions of θ as Chebyshev series ---------------------------------------
+#: Each series covers its support interval and this much (rad) on either side: a phase ends at its
+#: guards inside the interval (forward or backward handover), overshooting it by one integration
+#: step at most.
+SERIES_MARGIN = 0.2
+#: Series degrees tried, lowest first, until the off-grid check of :func:`support_series` holds.
+SERIES_DEGREES = (40, 48, 56, 64, 80, 96, 128)
+#: Largest error of a series at off-grid points, relative to the quantity's largest magnitude on
+#: the interval (the tests check 1e-10 against the exact linkage at other points).  The guards,
+#: differences of two foot heights of about 0.5 m that vanish at the handovers, are measured
+#: against :data:`GUARD_SCALE` instead: their rounding floor is ~1e-16 m, not relative to them.
+SERIES_TOLERANCE = 1e-12
+GUARD_SCALE = 0.1  # m
+#: The quantities of one support phase (per unit density where a mass enters): M_s, dM_s/dθ, the
+#: centre of mass's rate relative to the stance foot d(R − F_s)/dθ (x, y), the forward guard and
+#: impact ratio ρ, the backward guard and ρ (see :class:`Strandbeest`).
+SERIES_QUANTITIES = ("M", "dM", "d_rel_x", "d_rel_y", "guard", "rho", "guard_back", "rho_back")
+
+
+def _support_exact(k: int) -> ca.Function:
+    """``exact_k(θ) -> 8×1``: :data:`SERIES_QUANTITIES` of support phase ``k`` from the
+    closed-form dyads of all twelve legs (MX)."""
+    feet_seq, _ = contact_sequence()
+    K = len(feet_seq)
+    s, nxt, prv = feet_seq[k], feet_seq[(k + 1) % K], feet_seq[(k - 1) % K]
+    shift_fwd = _PERIOD if k == K - 1 else 0.0
+    shift_back = -_PERIOD if k == 0 else 0.0
+    theta = ca.MX.sym("theta")
+    mass = 12 * _leg_mass() + 6 * _pair_extra_mass()
+    F, dF, ddF, S, dS, M_rel, dM_rel, _, dR, _ = _machine()(theta)
+    F_ahead, dF_ahead = _machine()(theta - shift_fwd)[:2]
+    F_behind, dF_behind = _machine()(theta - shift_back)[:2]
+    w, dw = -dF[:, s], -ddF[:, s]
+    M = mass * ca.dot(w, w) + 2 * ca.dot(w, S) + M_rel
+    dM = 2 * mass * ca.dot(w, dw) + 2 * (ca.dot(dw, S) + ca.dot(w, dS)) + dM_rel
+    d_rel = dR + w
+
+    def ratio(new_w: Any) -> Any:  # ρ = G_nᵀ M₃ G_s / G_nᵀ M₃ G_n (plastic impact)
+        M_n = mass * ca.dot(new_w, new_w) + 2 * ca.dot(new_w, S) + M_rel
+        return (mass * ca.dot(new_w, w) + ca.dot(S, new_w + w) + M_rel) / M_n
+
+    out = ca.vertcat(
+        M, dM, d_rel, F_ahead[1, nxt] - F[1, s], ratio(-dF_ahead[:, nxt]),
+        F_behind[1, prv] - F[1, s], ratio(-dF_behind[:, prv]),
+    )  # fmt: skip
+    return ca.Function(f"exact_{k}", [theta], [out])
+
+
+def _interval(k: int) -> tuple[float, float]:
+    """The interval (rad) of phase ``k``'s series: its support interval ± :data:`SERIES_MARGIN`."""
+    _, angles = contact_sequence()
+    return angles[k] - SERIES_MARGIN, angles[k + 1] + SERIES_MARGIN
+
+
+@lru_cache(maxsize=8)
+def support_series(k: int) -> tuple[np.ndarray, float, float, float]:
+    """Chebyshev coefficients of support phase ``k``'s quantities on its interval.
+
+    Interpolation at the Chebyshev points of the first kind of the lowest degree in
+    :data:`SERIES_DEGREES` whose largest error at 200 other points of the interval, relative to
+    each quantity's largest magnitude there (:data:`GUARD_SCALE` for the guards), is below
+    :data:`SERIES_TOLERANCE` (the linkage is analytic in θ, so the series converge geometrically:
+    degree 96 gives ~1e-14 on every phase; 64 leaves 4e-10 in M' near the longest intervals).
+
+    Returns
+    -------
+    coefficients : numpy.ndarray
+        ``8 × (degree + 1)``, rows in the order of :data:`SERIES_QUANTITIES`.
+    a, b : float
+        The interval (rad).
+    error : float
+        The largest relative error found at the check points.
+    """
+    a, b = _interval(k)
+    exact = _support_exact(k)
+    check = a + (b - a) * np.random.default_rng(k).uniform(size=200)
+    want = np.asarray(exact.map(check.size)(check.reshape(1, -1)))
+    scale = np.max(np.abs(want), axis=1, keepdims=True)
+    for q in ("guard", "guard_back"):
+        row = SERIES_QUANTITIES.index(q)
+        scale[row] = max(scale[row, 0], GUARD_SCALE)
+    for degree in SERIES_DEGREES:
+        nodes = np.cos(np.pi * (np.arange(degree + 1) + 0.5) / (degree + 1))
+        thetas = 0.5 * (a + b) + 0.5 * (b - a) * nodes
+        values = np.asarray(exact.map(nodes.size)(thetas.reshape(1, -1)))
+        coefficients = np.polynomial.chebyshev.chebfit(nodes, values.T, degree).T
+        u = (2 * check - (a + b)) / (b - a)
+        got = np.polynomial.chebyshev.chebval(u, coefficients.T)  # 8 × 200
+        error = float(np.max(np.abs(got - want) / scale))
+        if error < SERIES_TOLERANCE:
+            return coefficients, a, b, error
+    raise RuntimeError(f"strandbeest: support phase {k}'s series did not converge ({error:.2g})")
+
+
+def _series(theta: Any, k: int) -> dict[str, Any]:
+    """Support phase ``k``'s quantities at symbolic ``theta`` from their series: the Chebyshev
+    polynomials ``T_j(u)`` once by their recurrence ``T_{j+1} = 2u T_j − T_{j−1}``, shared by the
+    eight sums (a smaller graph, and so smaller compiled kernels, than a Clenshaw sum each)."""
+    coefficients, a, b, _ = support_series(k)
+    u = (2 * theta - (a + b)) / (b - a)
+    T = [ca.SX(1.0) if isinstance(u, ca.SX) else 1.0, u]
+    while len(T) < coefficients.shape[1]:
+        T.append(2 * u * T[-1] - T[-2])
+    basis = ca.vertcat(*T[: coefficients.shape[1]])
+    values = ca.mtimes(ca.DM(coefficients), basis)
+    return {q: values[i] for i, q in enumerate(SERIES_QUANTITIES)}
 
 
 @lru_cache(maxsize=1)
@@ -194,6 +309,8 @@ def contact_sequence() -> tuple[tuple[int, ...], tuple[float, ...]]:
     heights = np.asarray(feet(grid.reshape(1, -1))[0])[1].reshape(7201, 12)
     low = np.argmin(heights, axis=1)
     switches = [n for n in range(len(grid) - 1) if low[n + 1] != low[n]]
+
+    from scipy.optimize import brentq
 
     def height(t: float, q: int) -> float:
         return float(np.asarray(_feet()(t)[0])[1, q])
@@ -287,13 +404,6 @@ class Strandbeest(HybridModel):
             dV = grav * (ca.sin(gamma) * d_rel[0] + ca.cos(gamma) * d_rel[1])
             return dict(w=w, M=M, dM=dM, V=V, dV=dV, rel=rel, d_rel=d_rel, dd_rel=dd_rel)
 
-        def ratio(mc: dict, new_w: Any, old_w: Any) -> Any:
-            """ρ = G_nᵀ M₃ G_s / G_nᵀ M₃ G_n (plastic impact; density cancels)."""
-            m_ = mc["mass"]
-            M_n = m_ * ca.dot(new_w, new_w) + 2 * ca.dot(new_w, mc["S"]) + mc["M_rel"]
-            cross = m_ * ca.dot(new_w, old_w) + ca.dot(mc["S"], new_w + old_w) + mc["M_rel"]
-            return cross / M_n
-
         here = machine(theta)
         rotation = ca.vertcat(
             ca.horzcat(ca.cos(gamma), -ca.sin(gamma)), ca.horzcat(ca.sin(gamma), ca.cos(gamma))
@@ -306,19 +416,25 @@ class Strandbeest(HybridModel):
             shift_fwd = _PERIOD if k == K - 1 else 0.0
             shift_back = -_PERIOD if k == 0 else 0.0
             st = stance(here, s)
+            # The flow, guards and resets from the phase's Chebyshev series of M_s, M_s', the
+            # centre of mass's rate and the guards and ratios (support_series: within 1e-12 of
+            # the linkage), as SX: twelve legs in every flow evaluation made the shooting slow.
+            xs, (th, th_dot) = sym.states("theta", "theta_dot")
+            ser = _series(th, k)
+            dV = (
+                sym.gravity
+                * (12 * _leg_mass() + 6 * _pair_extra_mass())
+                * (ca.sin(sym.slope) * ser["d_rel_x"] + ca.cos(sym.slope) * ser["d_rel_y"])
+            )
             # M θ̈ + ½ M' θ̇² + V' = τ (Lagrange, one coordinate); M, V per unit density.
-            accel = (tau / density - st["dV"] - 0.5 * st["dM"] * theta_dot**2) / st["M"]
-            flow = function("flow", ca.vertcat(theta_dot, accel))
+            accel = (sym.torque / sym.density - dV - 0.5 * ser["dM"] * th_dot**2) / ser["M"]
+            flow = sym.function("flow", xs, ca.vertcat(th_dot, accel))
             ahead, behind = machine(theta - shift_fwd), machine(theta - shift_back)
-            w_next, w_prev = -ahead["dF"][:, nxt], -behind["dF"][:, prv]
             forward = Transition(
                 name="handover",
-                guard=function("guard", ahead["F"][1, nxt] - here["F"][1, s]),
+                guard=sym.function("guard", xs, ser["guard"]),
                 direction=-1,
-                reset=function(
-                    "reset",
-                    ca.vertcat(theta - shift_fwd, ratio(here, w_next, st["w"]) * theta_dot),
-                ),
+                reset=sym.function("reset", xs, ca.vertcat(th - shift_fwd, ser["rho"] * th_dot)),
                 target=(k + 1) % K,
                 foothold="next_foot",
                 doc="the next foot comes down to the stance foot's height; plastic impact "
@@ -326,11 +442,10 @@ class Strandbeest(HybridModel):
             )
             backward = Transition(
                 name="backward handover",
-                guard=function("guard", behind["F"][1, prv] - here["F"][1, s]),
+                guard=sym.function("guard", xs, ser["guard_back"]),
                 direction=-1,
-                reset=function(
-                    "reset",
-                    ca.vertcat(theta - shift_back, ratio(here, w_prev, st["w"]) * theta_dot),
+                reset=sym.function(
+                    "reset", xs, ca.vertcat(th - shift_back, ser["rho_back"] * th_dot)
                 ),
                 target=(k - 1) % K,
                 foothold="previous_foot",
@@ -344,7 +459,9 @@ class Strandbeest(HybridModel):
                 ["energy"],
             )
             # Normal force: m (ÿ_cm + g cos γ), the stance foot fixed (N).
-            a_cm = st["dd_rel"] * theta_dot**2 + st["d_rel"] * accel
+            # (the exact θ̈, from the twelve legs: a check on dense samples, not the flow).
+            exact_accel = (tau / density - st["dV"] - 0.5 * st["dM"] * theta_dot**2) / st["M"]
+            a_cm = st["dd_rel"] * theta_dot**2 + st["d_rel"] * exact_accel
             normal = density * here["mass"] * (a_cm[1] + g * ca.cos(gamma))
             push = Constraint(
                 "stance foot pushes on the ground",
@@ -434,7 +551,7 @@ def _machine_numeric(turn, theta: float, density: float):
     lk = turn.linkage
     reflect = np.array([-1.0, 1.0])
     legs = []
-    for ph in SIX_PAIR_PHASES:
+    for ph in _linkage().SIX_PAIR_PHASES:
         z, dz = turn.at(theta + ph)
         t = theta + ph
         pts = {"pin": lk.pin(t), "pivot": lk.pivot, "axle": np.zeros(2)}
@@ -442,7 +559,7 @@ def _machine_numeric(turn, theta: float, density: float):
         for n, name in enumerate(("upper", "lower", "back", "knee", "foot")):
             pts[name], dpts[name] = z[n], dz[n]
         legs.append((pts, dpts))
-    for ph in SIX_PAIR_PHASES:
+    for ph in _linkage().SIX_PAIR_PHASES:
         t = math.pi - theta - ph
         z, dz = turn.at(t)
         pts = {"pin": reflect * lk.pin(t), "pivot": reflect * lk.pivot}
@@ -476,7 +593,9 @@ def _machine_numeric(turn, theta: float, density: float):
 
 @lru_cache(maxsize=64)
 def _closed_form(slope, torque, gravity, density, samples) -> dict[str, Any]:
-    turn = JansenLinkage().turn(720)
+    from scipy.optimize import brentq
+
+    turn = _linkage().JansenLinkage().turn(720)
     feet_seq, _ = contact_sequence()
     K = len(feet_seq)
 
