@@ -253,3 +253,28 @@ def test_shooting_finds_the_closed_form_gait(walker):
     assert cf["theta_dot"] == pytest.approx(6.223232504417, abs=1e-12)
     assert cf["multiplier"] == pytest.approx(0.97125350499, abs=1e-11)
     assert cf["period"] == pytest.approx(0.164696781280, abs=1e-12)
+
+
+def test_drawn_handovers_land_on_the_drawn_ground(walker):
+    # The animation's ground is y = −x tan γ (downhill towards +x): each handover's next foot,
+    # drawn relative to the stance foot (on the same or the mirror side of the machine), is on
+    # it to 1e-9 m (the guard: equal heights in the slope frame), and over a period the crank
+    # axle moves downhill (+x, down by tan γ per metre: the frame stays level on level feet).
+    import gaitopt
+    from gaitopt.animation import walker_frames
+
+    sim = gaitopt.simulate(walker, {"theta_dot": walker.closed_form()["theta_dot"]}, steps=1)
+    assert sim.success and len(sim.events) >= 6, sim.message
+    for event in sim.events[:6]:
+        phase = walker.phases[event.phase]
+        pts = np.asarray(phase.points(event.state_before, walker.p))
+        step = pts[:, phase.point_names.index("next_foot")]
+        assert abs(step[0]) > 0.01
+        assert step[1] == pytest.approx(-step[0] * math.tan(walker.slope), abs=1e-9)
+    start, end = walker_frames(walker, sim, [sim.arcs[0].t0, sim.arcs[-1].t1])
+    for frame in (start, end):
+        x, y = frame["contact"]
+        assert y == pytest.approx(-x * math.tan(walker.slope), abs=1e-9)
+    moved = end["mass"][:, 0] - start["mass"][:, 0]
+    assert moved[0] > 0.05
+    assert moved[1] == pytest.approx(-moved[0] * math.tan(walker.slope), abs=1e-9)

@@ -15,6 +15,7 @@ from .raibert_hopper import RaibertHopper
 from .rimless_wheel import RimlessWheel
 from .simplest_walker import SimplestWalker
 from .slip import Slip
+from .strandbeest import Strandbeest
 from .vanderpol import VanDerPol
 from .vertical_hopper import VerticalHopper
 
@@ -35,6 +36,7 @@ __all__ = [
     "RimlessWheel",
     "SimplestWalker",
     "Slip",
+    "Strandbeest",
     "VanDerPol",
     "VerticalHopper",
 ]
@@ -55,6 +57,7 @@ REGISTRY: dict[str, type[HybridModel]] = {
         LineJuggler,
         PlanarJuggler,
         BallisticWalker,
+        Strandbeest,
     )
 }
 

@@ -194,13 +194,16 @@ SERIES_DEGREES = (40, 48, 56, 64, 80, 96, 128)
 SERIES_TOLERANCE = 1e-12
 GUARD_SCALE = 0.1  # m
 #: The quantities of one support phase (per unit density where a mass enters): M_s, dM_s/dθ, the
-#: centre of mass's rate relative to the stance foot d(R − F_s)/dθ (x, y), the forward guard and
-#: impact ratio ρ, the backward guard and ρ (see :class:`Strandbeest`).
-SERIES_QUANTITIES = ("M", "dM", "d_rel_x", "d_rel_y", "guard", "rho", "guard_back", "rho_back")
+#: centre of mass's rate relative to the stance foot d(R − F_s)/dθ (x, y) and d²(R − F_s)/dθ² (y,
+#: for the normal force), the forward guard and impact ratio ρ, the backward guard and ρ (see
+#: :class:`Strandbeest`).
+SERIES_QUANTITIES = (
+    "M", "dM", "d_rel_x", "d_rel_y", "dd_rel_y", "guard", "rho", "guard_back", "rho_back",
+)  # fmt: skip
 
 
 def _support_exact(k: int) -> ca.Function:
-    """``exact_k(θ) -> 8×1``: :data:`SERIES_QUANTITIES` of support phase ``k`` from the
+    """``exact_k(θ) -> 9×1``: :data:`SERIES_QUANTITIES` of support phase ``k`` from the
     closed-form dyads of all twelve legs (MX)."""
     feet_seq, _ = contact_sequence()
     K = len(feet_seq)
@@ -209,7 +212,7 @@ def _support_exact(k: int) -> ca.Function:
     shift_back = -_PERIOD if k == 0 else 0.0
     theta = ca.MX.sym("theta")
     mass = 12 * _leg_mass() + 6 * _pair_extra_mass()
-    F, dF, ddF, S, dS, M_rel, dM_rel, _, dR, _ = _machine()(theta)
+    F, dF, ddF, S, dS, M_rel, dM_rel, _, dR, ddR = _machine()(theta)
     F_ahead, dF_ahead = _machine()(theta - shift_fwd)[:2]
     F_behind, dF_behind = _machine()(theta - shift_back)[:2]
     w, dw = -dF[:, s], -ddF[:, s]
@@ -222,7 +225,7 @@ def _support_exact(k: int) -> ca.Function:
         return (mass * ca.dot(new_w, w) + ca.dot(S, new_w + w) + M_rel) / M_n
 
     out = ca.vertcat(
-        M, dM, d_rel, F_ahead[1, nxt] - F[1, s], ratio(-dF_ahead[:, nxt]),
+        M, dM, d_rel, ddR[1] + dw[1], F_ahead[1, nxt] - F[1, s], ratio(-dF_ahead[:, nxt]),
         F_behind[1, prv] - F[1, s], ratio(-dF_behind[:, prv]),
     )  # fmt: skip
     return ca.Function(f"exact_{k}", [theta], [out])
@@ -247,7 +250,7 @@ def support_series(k: int) -> tuple[np.ndarray, float, float, float]:
     Returns
     -------
     coefficients : numpy.ndarray
-        ``8 × (degree + 1)``, rows in the order of :data:`SERIES_QUANTITIES`.
+        ``9 × (degree + 1)``, rows in the order of :data:`SERIES_QUANTITIES`.
     a, b : float
         The interval (rad).
     error : float
@@ -267,7 +270,7 @@ def support_series(k: int) -> tuple[np.ndarray, float, float, float]:
         values = np.asarray(exact.map(nodes.size)(thetas.reshape(1, -1)))
         coefficients = np.polynomial.chebyshev.chebfit(nodes, values.T, degree).T
         u = (2 * check - (a + b)) / (b - a)
-        got = np.polynomial.chebyshev.chebval(u, coefficients.T)  # 8 × 200
+        got = np.polynomial.chebyshev.chebval(u, coefficients.T)  # 9 × 200
         error = float(np.max(np.abs(got - want) / scale))
         if error < SERIES_TOLERANCE:
             return coefficients, a, b, error
@@ -277,7 +280,7 @@ def support_series(k: int) -> tuple[np.ndarray, float, float, float]:
 def _series(theta: Any, k: int) -> dict[str, Any]:
     """Support phase ``k``'s quantities at symbolic ``theta`` from their series: the Chebyshev
     polynomials ``T_j(u)`` once by their recurrence ``T_{j+1} = 2u T_j − T_{j−1}``, shared by the
-    eight sums (a smaller graph, and so smaller compiled kernels, than a Clenshaw sum each)."""
+    nine sums (a smaller graph, and so smaller compiled kernels, than a Clenshaw sum each)."""
     coefficients, a, b, _ = support_series(k)
     u = (2 * theta - (a + b)) / (b - a)
     T = [ca.SX(1.0) if isinstance(u, ca.SX) else 1.0, u]
@@ -336,6 +339,10 @@ class Strandbeest(HybridModel):
     title = "Strandbeest (Jansen's linkage, six pairs)"
     reference = "Jansen 2007; Deits, Drake examples/multibody/strandbeest; Tedrake, rimless wheel"
     mesh = (3, 4)
+    state_units = {"theta": "rad", "theta_dot": "rad/s"}  # for axis labels
+    #: The drawing: the stance foot and the next and previous feet as spokes from the crank axle
+    #: (the generalised rimless wheel; the linkage's own figures are the study's).
+    drawing = (("foot", "axle", "next_foot"), ("axle", "previous_foot"))
 
     slope: float = parameter(
         0.02,
@@ -405,8 +412,11 @@ class Strandbeest(HybridModel):
             return dict(w=w, M=M, dM=dM, V=V, dV=dV, rel=rel, d_rel=d_rel, dd_rel=dd_rel)
 
         here = machine(theta)
+        # Drawing frame: the slope frame turned by γ and mirrored about the vertical, so that the
+        # machine walks downhill towards +x on the ground y = −x tan γ, the convention of
+        # gaitopt.animation (the model's own x points uphill).
         rotation = ca.vertcat(
-            ca.horzcat(ca.cos(gamma), -ca.sin(gamma)), ca.horzcat(ca.sin(gamma), ca.cos(gamma))
+            ca.horzcat(-ca.cos(gamma), ca.sin(gamma)), ca.horzcat(ca.sin(gamma), ca.cos(gamma))
         )
         phases = []
         for k in range(K):
@@ -458,19 +468,19 @@ class Strandbeest(HybridModel):
                 ["x", "p"],
                 ["energy"],
             )
-            # Normal force: m (ÿ_cm + g cos γ), the stance foot fixed (N).
-            # (the exact θ̈, from the twelve legs: a check on dense samples, not the flow).
-            exact_accel = (tau / density - st["dV"] - 0.5 * st["dM"] * theta_dot**2) / st["M"]
-            a_cm = st["dd_rel"] * theta_dot**2 + st["d_rel"] * exact_accel
-            normal = density * here["mass"] * (a_cm[1] + g * ca.cos(gamma))
+            # Normal force: m (ÿ_cm + g cos γ), the stance foot fixed (N), from the series too
+            # (a simulation evaluates it at every step, as an event).
+            a_cm_y = ser["dd_rel_y"] * th_dot**2 + ser["d_rel_y"] * accel
+            mass = 12 * _leg_mass() + 6 * _pair_extra_mass()
+            normal = sym.density * mass * (a_cm_y + sym.gravity * ca.cos(sym.slope))
             push = Constraint(
                 "stance foot pushes on the ground",
-                function("constraint", normal),
+                sym.function("constraint", xs, normal),
                 "stance foot lifts off",
                 unit="N",
                 source="a ground contact can only push (unilateral normal force)",
             )
-            # Drawing points, world frame (the slope frame turned by γ), stance foot at 0.
+            # Drawing points, world frame (the drawing frame above), stance foot at 0.
             foot = here["F"][:, s]
             drawn = [
                 ca.mtimes(rotation, v - foot)
