@@ -398,3 +398,17 @@ def write_outputs(out: str | None, write: Callable[[Path], None]) -> str | None:
         f"{PROG}: error: --out {out}: cannot write there ({reason}); the results were written "
         f"to {folder} instead"
     )
+
+
+def write_result(result: Any, folder: Path, stem: str, plot: Callable[[Any], Any]) -> None:
+    """``stem``.json, and with points ``stem``.csv and ``stem``.png, in ``folder`` (each written
+    atomically): the files of a branch or a curve (``as_dict``, ``cycles``, ``csv_rows``)."""
+    from ..files import write_csv, write_json
+    from ..plotting import save_figure
+
+    folder.mkdir(parents=True, exist_ok=True)
+    write_json(result.as_dict(), folder / f"{stem}.json")
+    if result.cycles:
+        write_csv(*result.csv_rows(), folder / f"{stem}.csv")
+        fig, _ = plot(result)
+        save_figure(fig, folder / f"{stem}.png")

@@ -32,6 +32,7 @@ from .common import (
     build_model,
     parse_guess,
     write_outputs,
+    write_result,
 )
 
 
@@ -116,14 +117,9 @@ def run_continue(args: argparse.Namespace) -> int:
 
 
 def _write_branch(branch: Branch, folder: Path) -> None:
-    from ..files import write_csv, write_json
-    from ..plotting import plot_branch, save_figure
+    from ..plotting import plot_branch
 
-    write_json(branch.as_dict(), folder / "branch.json")
-    if branch.cycles:
-        write_csv(*branch.csv_rows(), folder / "branch.csv")
-        fig, _ = plot_branch(branch)
-        save_figure(fig, folder / "branch.png")
+    write_result(branch, folder, "branch", plot_branch)
 
 
 def _print_branch(branch: Branch) -> None:

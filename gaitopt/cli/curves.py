@@ -33,6 +33,7 @@ from .common import (
     _solver_output_to_stderr,
     build_model,
     parse_guess,
+    write_result,
 )
 
 __all__ = ["add_curve_arguments", "wants_curve", "run_curve"]
@@ -137,17 +138,9 @@ def run_curve(args: argparse.Namespace) -> int:
 
 def write_curve(curve: Curve, folder: Path) -> None:
     """curve.json, curve.csv and curve.png in ``folder`` (each written atomically)."""
-    from ..files import write_csv, write_json
-    from ..plotting import save_figure
+    from ..curves.plot import plot_curve
 
-    folder.mkdir(parents=True, exist_ok=True)
-    write_json(curve.as_dict(), folder / "curve.json")
-    if curve.cycles:
-        from ..curves.plot import plot_curve
-
-        write_csv(*curve.csv_rows(), folder / "curve.csv")
-        fig, _ = plot_curve(curve)
-        save_figure(fig, folder / "curve.png")
+    write_result(curve, folder, "curve", plot_curve)
 
 
 def print_curve(curve: Curve) -> None:
