@@ -13,7 +13,17 @@ from typing import Any
 
 from .errors import ParameterError
 
-__all__ = ["ParameterSpec", "parameter", "parameter_specs", "check_parameter"]
+__all__ = [
+    "ParameterSpec",
+    "parameter",
+    "parameter_specs",
+    "check_parameter",
+    "gravity_parameter",
+    "STANDARD_GRAVITY",
+]
+
+#: Standard gravity (m/s²), rounded as in the textbooks the models follow (9.80665 exactly).
+STANDARD_GRAVITY = 9.81
 
 
 @dataclass(frozen=True)
@@ -99,6 +109,22 @@ def parameter(
     """Declare a model parameter as a dataclass field (see :class:`ParameterSpec`)."""
     spec = ParameterSpec("", unit, default, doc, source, low, high, low_open, high_open, integer)
     return dataclasses.field(default=default, metadata={"gaitopt": spec})
+
+
+def gravity_parameter(source: str = "standard gravity") -> Any:
+    """The gravitational acceleration ``g`` (m/s², default :data:`STANDARD_GRAVITY`, range
+    (0, 100]) as a model parameter: every model with gravity declares it with this, so that its
+    name, unit, default and range are the same in each.  ``source``: where the model's default
+    comes from, if not simply standard gravity (the five-link biped: OptimTraj's value)."""
+    return parameter(
+        STANDARD_GRAVITY,
+        unit="m/s^2",
+        doc="gravitational acceleration g",
+        source=source,
+        low=0.0,
+        high=100.0,
+        low_open=True,
+    )
 
 
 def parameter_specs(model_cls: type) -> tuple[ParameterSpec, ...]:

@@ -44,7 +44,7 @@ import numpy as np
 
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..mechanics import kinetic_energy, lagrange_acceleration, potential_energy, rigid_link
-from ..parameters import parameter
+from ..parameters import gravity_parameter, parameter
 
 __all__ = ["BallisticWalker", "Swing"]
 
@@ -131,10 +131,7 @@ class BallisticWalker(HybridModel):
         0.6, unit="rad", doc="knee flexion at toe-off κ₀ (≈ 35°)",
         source="typical human knee flexion at toe-off (Winter, gait data)", low=0.0, high=1.5,
     )  # fmt: skip
-    gravity: float = parameter(
-        9.81, unit="m/s^2", doc="gravitational acceleration g", source="standard gravity",
-        low=0.0, high=100.0, low_open=True,
-    )  # fmt: skip
+    gravity: float = gravity_parameter()
 
     def check(self) -> None:
         from ..errors import ParameterError

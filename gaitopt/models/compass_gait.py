@@ -33,7 +33,7 @@ from ..mechanics import (
     lagrange_acceleration,
     potential_energy,
 )
-from ..parameters import parameter
+from ..parameters import gravity_parameter, parameter
 
 __all__ = ["CompassGait"]
 
@@ -87,15 +87,7 @@ class CompassGait(HybridModel):
         high=10.0,
         low_open=True,
     )
-    gravity: float = parameter(
-        9.81,
-        unit="m/s^2",
-        doc="gravitational acceleration g",
-        source="standard gravity",
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+    gravity: float = gravity_parameter()
     slope: float = parameter(
         0.0525,
         unit="rad",

@@ -114,7 +114,7 @@ from ..mechanics import (
     potential_energy,
     rigid_link,
 )
-from ..parameters import parameter
+from ..parameters import gravity_parameter, parameter
 
 __all__ = ["FiveLinkBiped"]
 
@@ -334,15 +334,7 @@ class FiveLinkBiped(HybridModel):
         low=0.0,
         high=10.0,
     )
-    gravity: float = parameter(
-        9.81,
-        unit="m/s^2",
-        doc="gravitational acceleration g",
-        source=_OPTIMTRAJ,
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+    gravity: float = gravity_parameter(_OPTIMTRAJ)
     slope: float = parameter(
         0.0,
         unit="rad",

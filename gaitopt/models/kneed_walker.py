@@ -89,7 +89,7 @@ from ..mechanics import (
     lagrange_acceleration,
     potential_energy,
 )
-from ..parameters import parameter
+from ..parameters import gravity_parameter, parameter
 
 __all__ = ["KneedWalker"]
 
@@ -282,15 +282,7 @@ class KneedWalker(HybridModel):
         high=10.0,
         low_open=True,
     )
-    gravity: float = parameter(
-        9.81,
-        unit="m/s^2",
-        doc="gravitational acceleration g",
-        source="standard gravity",
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+    gravity: float = gravity_parameter()
     slope: float = parameter(
         0.0504,
         unit="rad",

@@ -77,7 +77,7 @@ import casadi as ca
 import numpy as np
 
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
-from ..parameters import parameter
+from ..parameters import gravity_parameter, parameter
 
 __all__ = ["PlanarJuggler"]
 
@@ -166,15 +166,7 @@ class PlanarJuggler(HybridModel):
         high=100.0,
         low_open=True,
     )
-    gravity: float = parameter(
-        9.81,
-        unit="m/s^2",
-        doc="gravitational acceleration g",
-        source="standard gravity",
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+    gravity: float = gravity_parameter()
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:

@@ -65,7 +65,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
-from ..parameters import parameter
+from ..parameters import gravity_parameter, parameter
 
 __all__ = ["RaibertHopper", "FLIGHT_STATES", "STANCE_STATES"]
 
@@ -198,15 +198,7 @@ class RaibertHopper(HybridModel):
         low=0.0,
         high=1e5,
     )
-    gravity: float = parameter(
-        9.81,
-        unit="m/s^2",
-        doc="gravitational acceleration g",
-        source="standard gravity",
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+    gravity: float = gravity_parameter()
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:

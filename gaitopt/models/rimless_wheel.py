@@ -36,7 +36,7 @@ import casadi as ca
 import numpy as np
 
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
-from ..parameters import parameter
+from ..parameters import gravity_parameter, parameter
 
 __all__ = ["RimlessWheel"]
 
@@ -68,15 +68,7 @@ class RimlessWheel(HybridModel):
         high=100.0,
         low_open=True,
     )
-    gravity: float = parameter(
-        9.81,
-        unit="m/s^2",
-        doc="gravitational acceleration g",
-        source="standard gravity",
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+    gravity: float = gravity_parameter()
     slope: float = parameter(
         0.08,
         unit="rad",

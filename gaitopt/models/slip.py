@@ -53,12 +53,12 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
-from ..parameters import parameter
+from ..parameters import gravity_parameter, parameter
 
 __all__ = ["Slip", "SlipSwingLeg", "SWING_LAW_DEGREE"]
 
 _TEDRAKE = "Tedrake, Underactuated Robotics, SLIP apex map (after Geyer 2005)"
-_M, _G, _L0 = 80.0, 9.81, 1.0
+_M, _L0 = 80.0, 1.0
 #: Degree of the Chebyshev swing-leg law of :class:`SlipSwingLeg`.
 SWING_LAW_DEGREE = 8
 
@@ -321,15 +321,7 @@ class Slip(HybridModel):
         high=math.pi / 2,
         high_open=True,
     )
-    gravity: float = parameter(
-        _G,
-        unit="m/s^2",
-        doc="gravitational acceleration g",
-        source="standard gravity",
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+    gravity: float = gravity_parameter()
     energy: float = parameter(
         1263.528,
         unit="J",

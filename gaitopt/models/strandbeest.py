@@ -52,7 +52,7 @@ import casadi as ca
 import numpy as np
 
 from ..hybrid import Constraint, HybridModel, Phase, Section, Symbols, Transition
-from ..parameters import parameter
+from ..parameters import gravity_parameter, parameter
 
 __all__ = ["Strandbeest", "contact_sequence", "RODS"]
 
@@ -360,10 +360,7 @@ class Strandbeest(HybridModel):
         low=-1000.0,
         high=1000.0,
     )
-    gravity: float = parameter(
-        9.81, unit="m/s^2", doc="gravitational acceleration g", source="standard gravity",
-        low=0.0, high=100.0, low_open=True,
-    )  # fmt: skip
+    gravity: float = gravity_parameter()
     density: float = parameter(
         _DENSITY,
         unit="kg/m",

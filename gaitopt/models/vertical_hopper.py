@@ -76,7 +76,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
-from ..parameters import parameter
+from ..parameters import gravity_parameter, parameter
 
 __all__ = ["VerticalHopper"]
 
@@ -155,15 +155,7 @@ class VerticalHopper(HybridModel):
         high=4.0,
         low_open=True,  # K = 0: every apex height is a fixed point (the map is the identity)
     )
-    gravity: float = parameter(
-        9.81,
-        unit="m/s^2",
-        doc="gravitational acceleration g",
-        source="standard gravity",
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+    gravity: float = gravity_parameter()
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
