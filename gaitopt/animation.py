@@ -9,9 +9,11 @@ the body mass (the point named ``hip``, ``hub``, ``mass``, ``body``, ``axle`` or
 ball (``ball``).  At each transition with a ``foothold`` the contact point moves to that point's
 world position at the event, so successive steps walk on.
 
-A walker or hopper stands on the ground, drawn as the line ``y = −x·tan(slope)`` through the first
-contact; a scene without ground (a ball on a vibrating table, a juggler's paddle) says so with the
-class attribute ``on_ground = False``, and is drawn without it, its view filling the frame.  Such
+A walker or hopper stands on the ground, drawn as the line ``y = −x·tan(γ)`` through the first
+contact, γ the model's declared :meth:`~gaitopt.hybrid.HybridModel.ground_slope` (its ``slope``
+parameter, or 0); a scene without ground (a ball on a vibrating table, a juggler's paddle) says so
+with the declared class attribute :attr:`~gaitopt.hybrid.HybridModel.on_ground` ``= False``, and
+is drawn without it, its view filling the frame.  Such
 a scene's GIF is named ``animation.gif`` by ``make gaits`` (:func:`gif_name`), a walker's
 ``walking.gif``.
 """
@@ -37,9 +39,10 @@ _MASS_POINTS = ("hip", "hub", "mass", "body", "axle", "com", "ball")
 
 
 def on_ground(model: HybridModel) -> bool:
-    """Whether ``model``'s scene stands on the ground (its class attribute ``on_ground``,
-    default True): False for a ball on a table or a juggler's paddle, drawn without a ground."""
-    return bool(getattr(type(model), "on_ground", True))
+    """Whether ``model``'s scene stands on the ground (the declared
+    :attr:`~gaitopt.hybrid.HybridModel.on_ground`, default True): False for a ball on a table or
+    a juggler's paddle, drawn without a ground."""
+    return bool(model.on_ground)
 
 
 def gif_name(model: HybridModel) -> str:
@@ -230,7 +233,7 @@ def animate_walker(
     ymin, ymax = np.nanmin(allxy[1]), np.nanmax(allxy[1])
     pad = 0.12 * max(xmax - xmin, ymax - ymin)
     xmin, xmax, ymin, ymax = xmin - pad, xmax + pad, ymin - pad, ymax + pad
-    slope = float(getattr(model, "slope", 0.0))
+    slope = model.ground_slope()  # rad; 0 (level) for a model without a slope
     ground = on_ground(model)
     if not ground:
         # A scene without ground is tall and narrow (a ball above its paddle): widen the view to

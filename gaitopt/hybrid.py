@@ -291,6 +291,11 @@ class HybridModel:
     #: ``(("hip", "foot"), ("tail", "nose"))``; points in none are helpers, not drawn.  Empty:
     #: one polyline through every point in declared order.  :meth:`outline` overrides both.
     drawing: ClassVar[tuple[tuple[str, ...], ...]] = ()
+    #: Whether the scene stands on the ground (walkers, hoppers: drawn over the ground line
+    #: through the first contact, at :meth:`ground_slope`; animated as ``walking.gif``).  False
+    #: for a scene without ground (a ball on a vibrating table, a juggler's paddle): drawn
+    #: without it, its view filling the frame, animated as ``animation.gif``.
+    on_ground: ClassVar[bool] = True
     #: Default shooting mesh (segments per phase, RK steps per segment); refined automatically.
     mesh: ClassVar[tuple[int, int]] = (4, 3)
     #: Whether the model can have a passive gait (with its :meth:`nominal_input`) for
@@ -369,6 +374,12 @@ class HybridModel:
         spokes); ``points`` are ``phase.points(x, p)``.  None (default): use :attr:`drawing`."""
         del phase, x, points
         return None
+
+    def ground_slope(self) -> float:
+        """Slope (rad, positive downhill towards +x) of the ground a drawing shows under a scene
+        :attr:`on_ground`: the model's ``slope`` parameter where it declares one, else 0 (level
+        ground).  A model whose ground slope is another quantity overrides this."""
+        return float(self.params.get("slope", 0.0))
 
     def existence_note(self) -> str | None:
         """What closed-form theory says about the main gait's existence at these parameters, if
