@@ -66,6 +66,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
+from .blocks import apex, ballistic_flow, fall, hip_about_foot, leg_touchdown
 
 __all__ = ["RaibertHopper", "FLIGHT_STATES", "STANCE_STATES"]
 
@@ -216,51 +217,32 @@ class RaibertHopper(HybridModel):
 
         # -- flight: descent from the apex, foot placed by the speed controller --------------
         xf, (x, z, phi, x_dot, z_dot, phi_dot) = sym.states(*FLIGHT_STATES)
-        ballistic = sym.function("flow", xf, ca.vertcat(x_dot, z_dot, phi_dot, 0, -g, 0))
-        theta_td = touchdown_angle_law(sym, x_dot)
-        dx, dz = -l0 * ca.sin(theta_td), z  # hip relative to the foot at touchdown
-        touchdown = Transition(
-            name="touchdown",
-            guard=sym.function("guard", xf, z - l0 * ca.cos(theta_td)),  # z − l0 cos θ_td
-            direction=-1,
-            # Polar coordinates of the hip about the foot x + x_f; the body's pitch unchanged.
-            reset=sym.function(
-                "reset",
-                xf,
-                ca.vertcat(
-                    ca.sqrt(dx**2 + dz**2),
-                    ca.atan2(dx, dz),
-                    phi,
-                    (dx * x_dot + dz * z_dot) / ca.sqrt(dx**2 + dz**2),
-                    (dz * x_dot - dx * z_dot) / (dx**2 + dz**2),
-                    phi_dot,
-                ),
-            ),
-            target=1,
+        ballistic = ballistic_flow(sym, xf, g, vertical=1)  # ẍ = 0, z̈ = −g, φ̈ = 0
+        # z − l0 cos θ_td = 0; polar coordinates of the hip about the foot x + x_f, the body's
+        # pitch unchanged.
+        touchdown = leg_touchdown(
+            sym,
+            xf,
+            height=z,
+            velocity=(x_dot, z_dot),
+            length=l0,
+            angle=touchdown_angle_law(sym, x_dot),
+            carried=((phi,), (phi_dot,)),
             impact=False,  # a massless leg: no velocity changes
-            foothold="foot",
             doc="foot reaches the ground: z − l0·cos θ_td = 0, falling, θ_td = asin(x_f/l0) from "
             "Raibert's foot placement; the hip in polar coordinates about the foot",
         )
 
         def ground(name: str, what: str) -> Transition:
-            return Transition(
-                name=name,
-                guard=sym.function("guard", xf, z),
-                direction=-1,
-                reset=None,
-                target=None,
-                doc=what,
-            )
+            return fall(sym, xf, name, z, what)
 
         def tips_over(x_state: ca.SX, pitch: ca.SX) -> Transition:
-            return Transition(
-                name="body tips over (|phi| = pi/2)",
-                guard=sym.function("guard", x_state, ca.cos(pitch)),
-                direction=-1,
-                reset=None,
-                target=None,
-                doc="the body's pitch reaches ±90°",
+            return fall(
+                sym,
+                x_state,
+                "body tips over (|phi| = pi/2)",
+                ca.cos(pitch),
+                "the body's pitch reaches ±90°",
             )
 
         flight_energy = sym.conserved(
@@ -319,9 +301,7 @@ class RaibertHopper(HybridModel):
                 tau / J,
             ),
         )
-        hip_x, hip_z = r * ca.sin(th), r * ca.cos(th)
-        hip_xd = r_dot * ca.sin(th) + r * th_dot * ca.cos(th)
-        hip_zd = r_dot * ca.cos(th) - r * th_dot * ca.sin(th)
+        hip_x, hip_z, hip_xd, hip_zd = hip_about_foot(r, th, r_dot, th_dot)
         liftoff = Transition(
             name="liftoff",
             guard=sym.function("guard", xs, force),  # F = k (l0 + δ − r) − c ṙ = 0, falling
@@ -334,13 +314,12 @@ class RaibertHopper(HybridModel):
             doc="the leg force falls to zero, k (l0 + δ − r) − c ṙ = 0; Cartesian flight state "
             "with x from the foot (the massless leg then returns to l0)",
         )
-        collapses = Transition(
-            name="falls (hip reaches the ground in stance)",
-            guard=sym.function("guard", xs, hip_z),
-            direction=-1,
-            reset=None,
-            target=None,
-            doc="the hip reaches the foot's level",
+        collapses = fall(
+            sym,
+            xs,
+            "falls (hip reaches the ground in stance)",
+            hip_z,
+            "the hip reaches the foot's level",
         )
         stance_points = ca.Function(
             "points",
@@ -365,13 +344,11 @@ class RaibertHopper(HybridModel):
         )
 
         # -- flight: ascent to the apex --------------------------------------------------------
-        apex = Transition(
-            name="apex",
-            guard=sym.function("guard", xf, z_dot),  # ż = 0, falling
-            direction=-1,
-            reset=sym.function("reset", xf, ca.vertcat(0, z, phi, x_dot, z_dot, phi_dot)),
-            target=0,
-            impact=False,
+        top = apex(
+            sym,
+            xf,
+            z_dot,  # ż = 0, falling
+            ca.vertcat(0, z, phi, x_dot, z_dot, phi_dot),  # x from the apex
             foothold="below_hip",
             doc="top of the flight, ż = 0 falling; x is measured from here on",
         )
@@ -380,7 +357,7 @@ class RaibertHopper(HybridModel):
             FLIGHT_STATES,
             ballistic,
             (
-                apex,
+                top,
                 ground("falls (no apex after liftoff)", "lifted off falling: no apex"),
                 tips_over(xf, phi),
             ),

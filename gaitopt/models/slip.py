@@ -54,6 +54,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
+from .blocks import apex, ballistic_flow, fall, hip_about_foot, leg_touchdown
 
 __all__ = ["Slip", "SlipSwingLeg", "SWING_LAW_DEGREE"]
 
@@ -63,7 +64,7 @@ _M, _L0 = 80.0, 1.0
 SWING_LAW_DEGREE = 8
 
 
-def _build(cls: type[HybridModel], sym: Symbols, angle_law) -> tuple[tuple[Phase, ...], Section]:
+def _build(sym: Symbols, angle_law) -> tuple[tuple[Phase, ...], Section]:
     """The three phases and the apex section; ``angle_law(z_dot)`` is the leg angle in descent
     (a function of the time since apex ``t = −ż/g``)."""
     m, l0, k, g, E, h = (
@@ -79,36 +80,24 @@ def _build(cls: type[HybridModel], sym: Symbols, angle_law) -> tuple[tuple[Phase
 
     # -- flight: descent from the apex, leg at the touchdown angle -------------------------------
     xf, (x, z, x_dot, z_dot) = sym.states("x", "z", "x_dot", "z_dot")
-    ballistic = sym.function("flow", xf, ca.vertcat(x_dot, z_dot, 0, -g))
-    theta_td = angle_law(z_dot)
-    dx, dz = -l0 * ca.sin(theta_td), z - h  # hip relative to the foot at touchdown
-    touchdown = Transition(
-        name="touchdown",
-        guard=sym.function("guard", xf, z - h - l0 * ca.cos(theta_td)),  # z − h − l0 cos θ_td
-        direction=-1,
-        # Polar coordinates of the hip about the foot x + l0 sin θ_td (on the ground).
-        reset=sym.function(
-            "reset",
-            xf,
-            ca.vertcat(
-                ca.sqrt(dx**2 + dz**2),
-                ca.atan2(dx, dz),
-                (dx * x_dot + dz * z_dot) / ca.sqrt(dx**2 + dz**2),
-                (dz * x_dot - dx * z_dot) / (dx**2 + dz**2),
-            ),
-        ),
-        target=1,
-        foothold="foot",
+    ballistic = ballistic_flow(sym, xf, g, vertical=1)  # ẍ = 0, z̈ = −g
+    # z − h − l0 cos θ_td = 0; the hip in polar coordinates about the foot x + l0 sin θ_td.
+    touchdown = leg_touchdown(
+        sym,
+        xf,
+        height=z - h,
+        velocity=(x_dot, z_dot),
+        length=l0,
+        angle=angle_law(z_dot),
         doc="foot reaches the ground: z − h − l0·cos θ_td = 0, falling; the hip in polar "
         "coordinates about the foot",
     )
-    no_touchdown = Transition(
-        name="apex below touchdown height (hip reaches the ground)",
-        guard=sym.function("guard", xf, z - h),
-        direction=-1,
-        reset=None,
-        target=None,
-        doc="fires only if touchdown never armed: the apex was below h + l0·cos θ_td",
+    no_touchdown = fall(
+        sym,
+        xf,
+        "apex below touchdown height (hip reaches the ground)",
+        z - h,
+        "fires only if touchdown never armed: the apex was below h + l0·cos θ_td",
     )
     flight_energy = sym.conserved("energy", xf, 0.5 * m * (x_dot**2 + z_dot**2) + m * g * z)
     descent_points = ca.Function(
@@ -144,9 +133,8 @@ def _build(cls: type[HybridModel], sym: Symbols, angle_law) -> tuple[tuple[Phase
             (g * ca.sin(th) - 2 * r_dot * th_dot) / r,
         ),
     )
-    hip_x, hip_z = r * ca.sin(th), h + r * ca.cos(th)
-    hip_xd = r_dot * ca.sin(th) + r * th_dot * ca.cos(th)
-    hip_zd = r_dot * ca.cos(th) - r * th_dot * ca.sin(th)
+    hip_x, hip_above_foot, hip_xd, hip_zd = hip_about_foot(r, th, r_dot, th_dot)
+    hip_z = h + hip_above_foot
     to_flight = ca.vertcat(hip_x, hip_z, hip_xd, hip_zd)
     liftoff = Transition(
         name="liftoff",
@@ -159,30 +147,28 @@ def _build(cls: type[HybridModel], sym: Symbols, angle_law) -> tuple[tuple[Phase
         doc="the spring regains its rest length, r = l0, extending, moving forwards; Cartesian "
         "flight state with x from the foot",
     )
-    backwards = Transition(
-        name="falls back (lifts off moving backwards)",
-        guard=sym.function("guard", xs, r - l0),
+    backwards = fall(
+        sym,
+        xs,
+        "falls back (lifts off moving backwards)",
+        r - l0,
+        "liftoff with the hip moving backwards: too little forward energy",
         direction=+1,
-        reset=None,
-        target=None,
-        admissible=sym.function("admissible", xs, -hip_xd),
-        doc="liftoff with the hip moving backwards: too little forward energy",
+        admissible=-hip_xd,
     )
-    stops = Transition(
-        name="falls back (stance leg stops rotating)",
-        guard=sym.function("guard", xs, th_dot),
-        direction=-1,
-        reset=None,
-        target=None,
-        doc="θ̇ falls through 0 in stance: too little forward energy to vault over the foot",
+    stops = fall(
+        sym,
+        xs,
+        "falls back (stance leg stops rotating)",
+        th_dot,
+        "θ̇ falls through 0 in stance: too little forward energy to vault over the foot",
     )
-    collapses = Transition(
-        name="falls (hip reaches the ground in stance)",
-        guard=sym.function("guard", xs, r * ca.cos(th)),
-        direction=-1,
-        reset=None,
-        target=None,
-        doc="the hip reaches the foot's level",
+    collapses = fall(
+        sym,
+        xs,
+        "falls (hip reaches the ground in stance)",
+        hip_above_foot,
+        "the hip reaches the foot's level",
     )
     stance_energy = sym.conserved(
         "energy",
@@ -192,7 +178,7 @@ def _build(cls: type[HybridModel], sym: Symbols, angle_law) -> tuple[tuple[Phase
     stance_points = ca.Function(
         "points",
         [xs, sym.p],
-        [ca.horzcat(ca.vertcat(hip_x, r * ca.cos(th)), ca.DM.zeros(2, 1))],
+        [ca.horzcat(ca.vertcat(hip_x, hip_above_foot), ca.DM.zeros(2, 1))],
     )
     # The massless spring leg can only push: its force k (l0 − r) ≥ 0 (zero at touchdown and
     # at liftoff, where r = l0: it must compress at once after touchdown).
@@ -218,23 +204,20 @@ def _build(cls: type[HybridModel], sym: Symbols, angle_law) -> tuple[tuple[Phase
     )
 
     # -- flight: ascent to the apex ------------------------------------------------------------
-    apex = Transition(
-        name="apex",
-        guard=sym.function("guard", xf, z_dot),  # ż = 0, falling
-        direction=-1,
-        reset=sym.function("reset", xf, ca.vertcat(0, z, x_dot, z_dot)),  # x from the apex
-        target=0,
-        impact=False,
+    top = apex(
+        sym,
+        xf,
+        z_dot,  # ż = 0, falling
+        ca.vertcat(0, z, x_dot, z_dot),  # x from the apex
         foothold="below_hip",
         doc="top of the flight, ż = 0 falling; x is measured from here on",
     )
-    no_apex = Transition(
-        name="falls (no apex after liftoff)",
-        guard=sym.function("guard", xf, z - h),
-        direction=-1,
-        reset=None,
-        target=None,
-        doc="lifted off falling: the hip reaches the ground before any apex",
+    no_apex = fall(
+        sym,
+        xf,
+        "falls (no apex after liftoff)",
+        z - h,
+        "lifted off falling: the hip reaches the ground before any apex",
     )
     ascent_points = ca.Function(
         "points",
@@ -251,7 +234,7 @@ def _build(cls: type[HybridModel], sym: Symbols, angle_law) -> tuple[tuple[Phase
         "ascent",
         ("x", "z", "x_dot", "z_dot"),
         ballistic,
-        (apex, no_apex),
+        (top, no_apex),
         {"energy": flight_energy},
         points=ascent_points,
         point_names=("hip", "foot", "below_hip"),
@@ -265,7 +248,6 @@ def _build(cls: type[HybridModel], sym: Symbols, angle_law) -> tuple[tuple[Phase
         sym.lift(s, ca.vertcat(0, s[0], speed, 0)),
         "apex: z_dot = 0, x = 0, x_dot = sqrt(2 (energy/mass − gravity·z))",
     )
-    del cls
     return (descent, stance, ascent), section
 
 
@@ -342,7 +324,7 @@ class Slip(HybridModel):
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
-        return _build(cls, sym, lambda z_dot: sym.input("touchdown_angle"))
+        return _build(sym, lambda _z_dot: sym.input("touchdown_angle"))
 
     def check(self) -> None:
         top = self.energy / (self.mass * self.gravity)
@@ -451,7 +433,7 @@ class SlipSwingLeg(Slip):
                 angle = angle + sym.u[2 + j] * t_cur
             return angle
 
-        return _build(cls, sym, law)
+        return _build(sym, law)
 
     def nominal_input(self) -> np.ndarray:
         """The constant law ``θ(t) = touchdown_angle``."""

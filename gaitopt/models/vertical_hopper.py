@@ -77,6 +77,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
+from .blocks import apex, ballistic_flow, fall
 
 __all__ = ["VerticalHopper"]
 
@@ -164,7 +165,7 @@ class VerticalHopper(HybridModel):
 
         # -- flight (descent and ascent): ballistic, leg at rest length ---------------------------
         xf, (y, y_dot) = sym.states("y", "y_dot")
-        ballistic = sym.function("flow", xf, ca.vertcat(y_dot, -g))
+        ballistic = ballistic_flow(sym, xf, g, vertical=0)  # ÿ = −g
         flight_energy = sym.conserved("energy", xf, 0.5 * m * y_dot**2 + m * g * y)
         flight_points = ca.Function(
             "points", [xf, sym.p], [ca.horzcat(ca.vertcat(0, y), ca.vertcat(0, y - l0))]
@@ -183,13 +184,12 @@ class VerticalHopper(HybridModel):
             target=1,
             doc="foot reaches the ground: y = l0, falling; ẏ⁺ = sqrt(1 − ε)·ẏ⁻ (foot impact loss)",
         )
-        grounded = Transition(
-            name="apex below the leg length (body reaches the ground)",
-            guard=sym.function("guard", xf, y),
-            direction=-1,
-            reset=None,
-            target=None,
-            doc="fires only if touchdown never armed: the apex was at or below l0",
+        grounded = fall(
+            sym,
+            xf,
+            "apex below the leg length (body reaches the ground)",
+            y,
+            "fires only if touchdown never armed: the apex was at or below l0",
         )
         descent = Phase(
             "descent",
@@ -222,13 +222,12 @@ class VerticalHopper(HybridModel):
             doc="maximum compression ẏ = 0; rest length l0 → l0 + δ with δ from the energy "
             "controller W = (E_a − E_b) + K (E_d − E_a), δ = −c + sqrt(c² + 2W/k) + u",
         )
-        collapses_c = Transition(
-            name="collapses (body reaches the ground in stance)",
-            guard=sym.function("guard", xc, yc),
-            direction=-1,
-            reset=None,
-            target=None,
-            doc="y = 0: the spring is too soft for the fall",
+        collapses_c = fall(
+            sym,
+            xc,
+            "collapses (body reaches the ground in stance)",
+            yc,
+            "y = 0: the spring is too soft for the fall",
         )
         compression = Phase(
             "compression",
@@ -258,21 +257,19 @@ class VerticalHopper(HybridModel):
             impact=False,
             doc="the spring regains its rest length y = l0 + δ, rising; the leg returns to l0",
         )
-        no_liftoff = Transition(
-            name="no lift-off (falls back in stance)",
-            guard=sym.function("guard", xt, yt_dot),
-            direction=-1,
-            reset=None,
-            target=None,
-            doc="ẏ falls through 0 before y = l0 + δ: too little thrust to leave the ground",
+        no_liftoff = fall(
+            sym,
+            xt,
+            "no lift-off (falls back in stance)",
+            yt_dot,
+            "ẏ falls through 0 before y = l0 + δ: too little thrust to leave the ground",
         )
-        collapses_t = Transition(
-            name="collapses (body reaches the ground in stance)",
-            guard=sym.function("guard", xt, yt),
-            direction=-1,
-            reset=None,
-            target=None,
-            doc="y = 0 in the thrust phase",
+        collapses_t = fall(
+            sym,
+            xt,
+            "collapses (body reaches the ground in stance)",
+            yt,
+            "y = 0 in the thrust phase",
         )
         thrust_energy = 0.5 * m * yt_dot**2 + m * g * yt + 0.5 * k * (l0 + d - yt) ** 2 + lost_t
         thrust = Phase(
@@ -288,20 +285,12 @@ class VerticalHopper(HybridModel):
         )
 
         # -- ascent to the apex -------------------------------------------------------------------
-        apex = Transition(
-            name="apex",
-            guard=sym.function("guard", xf, y_dot),  # ẏ = 0, falling
-            direction=-1,
-            reset=sym.function("reset", xf, ca.vertcat(y, y_dot)),
-            target=0,
-            impact=False,
-            doc="top of the flight, ẏ = 0 falling",
-        )
+        top = apex(sym, xf, y_dot, ca.vertcat(y, y_dot), doc="top of the flight, ẏ = 0 falling")
         ascent = Phase(
             "ascent",
             ("y", "y_dot"),
             ballistic,
-            (apex,),
+            (top,),
             {"energy": flight_energy},
             points=flight_points,
             point_names=("body", "foot"),
