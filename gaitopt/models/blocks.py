@@ -12,6 +12,8 @@ one reads like its paper and computes exactly what it computed before.
   velocity from its polar coordinates about the foot.
 * :func:`apex` — the top of a flight, ``ż = 0`` falling: the Poincaré section of the runners
   and hoppers (Tedrake, *Underactuated Robotics*, "Simple models of walking and running").
+* :func:`bar_and_ball_points` — the drawing of a ball above a level bar (the bouncing ball's
+  table, the line juggler's paddle).
 
 Gravity itself is one parameter declaration for every model,
 :func:`gaitopt.parameters.gravity_parameter`.
@@ -23,7 +25,14 @@ import casadi as ca
 
 from ..hybrid import Symbols, Transition
 
-__all__ = ["fall", "ballistic_flow", "leg_touchdown", "hip_about_foot", "apex"]
+__all__ = [
+    "fall",
+    "ballistic_flow",
+    "leg_touchdown",
+    "hip_about_foot",
+    "apex",
+    "bar_and_ball_points",
+]
 
 
 def fall(
@@ -219,4 +228,39 @@ def apex(
         impact=False,
         foothold=foothold,
         doc=doc,
+    )
+
+
+def bar_and_ball_points(
+    sym: Symbols, x: ca.SX, *, bar: ca.SX, ball: ca.SX, half_width: float
+) -> ca.Function:
+    """Drawing points (m) of a ball above a level bar: the bar's left end ``(−w, bar)``, its right
+    end ``(w, bar)`` and the ball ``(0, ball)``, so that the drawn gap is ``ball − bar``.
+
+    Parameters
+    ----------
+    sym : Symbols
+        The model's symbols.
+    x : casadi.SX
+        The phase's state vector.
+    bar, ball : casadi.SX
+        Heights (m) of the bar and of the ball.
+    half_width : float
+        Half the bar's drawn width ``w`` (m).
+
+    Returns
+    -------
+    casadi.Function
+        ``points(x, p) -> 2×3``.
+    """
+    return ca.Function(
+        "points",
+        [x, sym.p],
+        [
+            ca.horzcat(
+                ca.vertcat(-half_width, bar),
+                ca.vertcat(half_width, bar),
+                ca.vertcat(0, ball),
+            )
+        ],
     )

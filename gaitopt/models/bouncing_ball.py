@@ -51,6 +51,7 @@ import numpy as np
 
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
+from .blocks import bar_and_ball_points
 
 __all__ = ["BouncingBall"]
 
@@ -148,17 +149,7 @@ class BouncingBall(HybridModel):
         # Drawing points (m): the table's top at s = A sin(phase), the ball at height y; so the
         # drawn gap between them is the constraint's y − A sin(phase).
         table = amp * ca.sin(phase)
-        points = ca.Function(
-            "points",
-            [x, sym.p],
-            [
-                ca.horzcat(
-                    ca.vertcat(-TABLE_HALF_WIDTH, table),
-                    ca.vertcat(TABLE_HALF_WIDTH, table),
-                    ca.vertcat(0, y),
-                )
-            ],
-        )
+        points = bar_and_ball_points(sym, x, bar=table, ball=y, half_width=TABLE_HALF_WIDTH)
         flight = Phase(
             "flight",
             ("phase", "y", "y_dot"),

@@ -34,6 +34,7 @@ from ..mechanics import (
     potential_energy,
 )
 from ..parameters import gravity_parameter, parameter
+from .blocks import fall
 
 __all__ = ["CompassGait"]
 
@@ -131,14 +132,8 @@ class CompassGait(HybridModel):
             foothold="swing_foot",
             doc="stance + swing = 2·slope with swing < stance; legs swap; plastic impact",
         )
-        fall = Transition(
-            name="fall",
-            guard=sym.function("guard", x, ca.cos(stance)),  # hip down to the foot's level
-            direction=-1,
-            reset=None,
-            target=None,
-            doc="the stance leg reaches horizontal",
-        )
+        # The hip down to the foot's level.
+        falls = fall(sym, x, "fall", ca.cos(stance), "the stance leg reaches horizontal")
         energy = sym.conserved(
             "energy", x, kinetic_energy(masses, q, qd) + potential_energy(masses, g)
         )
@@ -156,7 +151,7 @@ class CompassGait(HybridModel):
             "single support",
             ("stance", "swing", "stance_dot", "swing_dot"),
             flow,
-            (heel_strike, fall),
+            (heel_strike, falls),
             {"energy": energy},
             points=points,
             point_names=("stance_foot", "hip", "swing_foot"),

@@ -115,6 +115,7 @@ from ..mechanics import (
     rigid_link,
 )
 from ..parameters import gravity_parameter, parameter
+from .blocks import fall
 
 __all__ = ["FiveLinkBiped"]
 
@@ -387,22 +388,8 @@ class FiveLinkBiped(HybridModel):
             "foot; plastic impact at the swing foot (the old stance foot lifts off without "
             "impulse); legs swap (q1…q5 → q5…q1, and the rates)",
         )
-        fall = Transition(
-            name="fall",
-            guard=sym.function("guard", x, ca.dot(normal, geo["hip"])),
-            direction=-1,
-            reset=None,
-            target=None,
-            doc="the hip reaches the ground",
-        )
-        torso_fall = Transition(
-            name="torso fall",
-            guard=sym.function("guard", x, ca.cos(q[2])),
-            direction=-1,
-            reset=None,
-            target=None,
-            doc="the torso reaches horizontal",
-        )
+        falls = fall(sym, x, "fall", ca.dot(normal, geo["hip"]), "the hip reaches the ground")
+        torso_fall = fall(sym, x, "torso fall", ca.cos(q[2]), "the torso reaches horizontal")
         # Unilateral constraints.  The swing foot must stay above the ground: its height is the
         # guard h, 0 where the step begins (the trailing foot must then lift off, ḣ > 0, or the
         # gait would need a double-support phase, not modelled) and 0 at heel strike.  The stance
@@ -435,7 +422,7 @@ class FiveLinkBiped(HybridModel):
             "single support",
             STATE_NAMES,
             flow,
-            (heel_strike, fall, torso_fall),
+            (heel_strike, falls, torso_fall),
             {"energy": energy},
             points=points,
             point_names=POINT_NAMES,

@@ -90,6 +90,7 @@ from ..mechanics import (
     potential_energy,
 )
 from ..parameters import gravity_parameter, parameter
+from .blocks import fall
 
 __all__ = ["KneedWalker"]
 
@@ -338,14 +339,7 @@ class KneedWalker(HybridModel):
         # The swing foot clears the slope; it starts on it (the trailing foot at heel strike), so
         # it must lift off at once (see _contact_constraints).
         constraints0 = _contact_constraints(sym, x0, geo0, masses0, q, qd, tau0, at_start=True)
-        fall0 = Transition(
-            name="fall",
-            guard=sym.function("guard", x0, ca.cos(q1)),
-            direction=-1,
-            reset=None,
-            target=None,
-            doc="the stance leg reaches horizontal",
-        )
+        fall0 = fall(sym, x0, "fall", ca.cos(q1), "the stance leg reaches horizontal")
         energy0 = sym.conserved(
             "energy", x0, kinetic_energy(masses0, q, qd) + potential_energy(masses0, g)
         )
@@ -392,14 +386,7 @@ class KneedWalker(HybridModel):
         # its height returns to 0 (h = −2 (L − R) sin((q1 + q2)/2 − γ) sin((q1 − q2)/2): a leg
         # whose knee locks before it passes the stance leg scuffs).
         constraints1 = _contact_constraints(sym, x1, geo1, masses1, r, rd, tau1, at_end=True)
-        fall1 = Transition(
-            name="fall",
-            guard=sym.function("guard", x1, ca.cos(p1)),
-            direction=-1,
-            reset=None,
-            target=None,
-            doc="the stance leg reaches horizontal",
-        )
+        fall1 = fall(sym, x1, "fall", ca.cos(p1), "the stance leg reaches horizontal")
         energy1 = sym.conserved(
             "energy", x1, kinetic_energy(masses1, r, rd) + potential_energy(masses1, g)
         )

@@ -46,6 +46,7 @@ import casadi as ca
 
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
+from .blocks import bar_and_ball_points, fall
 
 __all__ = ["LineJuggler"]
 
@@ -123,13 +124,12 @@ class LineJuggler(HybridModel):
             admissible=sym.function("admissible", x, -v),  # the ball falls onto the paddle
             doc="ball meets the paddle r = −κ b at b = 0; v⁺ = −(e + (1 + e) κ) v⁻, b_dot⁺ = v⁻",
         )
-        dropped = Transition(
-            name="ball dropped (not thrown up by the paddle)",
-            guard=sym.function("guard", x, b + DROP_DEPTH),
-            direction=-1,
-            reset=None,
-            target=None,
-            doc=f"b < −{DROP_DEPTH:g} m: the impact knocked the ball down, e + (1 + e) κ ≤ 0",
+        dropped = fall(
+            sym,
+            x,
+            "ball dropped (not thrown up by the paddle)",
+            b + DROP_DEPTH,
+            f"b < −{DROP_DEPTH:g} m: the impact knocked the ball down, e + (1 + e) κ ≤ 0",
         )
         energy = sym.conserved("energy", x, 0.5 * v**2 + g * b)  # per unit mass (J/kg)
         # The ball stays above the paddle between impacts, b − r = b (1 + κ) ≥ 0: zero at the
@@ -148,17 +148,7 @@ class LineJuggler(HybridModel):
         # Drawing points (m, heights above the mirror point): the paddle at the mirror law's
         # r = −κ b and the ball at b; the drawn gap b − r is the constraint's b (1 + κ).
         paddle = -k * b
-        points = ca.Function(
-            "points",
-            [x, sym.p],
-            [
-                ca.horzcat(
-                    ca.vertcat(-PADDLE_HALF_WIDTH, paddle),
-                    ca.vertcat(PADDLE_HALF_WIDTH, paddle),
-                    ca.vertcat(0, b),
-                )
-            ],
-        )
+        points = bar_and_ball_points(sym, x, bar=paddle, ball=b, half_width=PADDLE_HALF_WIDTH)
         flight = Phase(
             "flight",
             ("b", "v", "b_dot"),

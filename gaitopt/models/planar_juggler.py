@@ -78,6 +78,7 @@ import numpy as np
 
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
+from .blocks import fall
 
 __all__ = ["PlanarJuggler"]
 
@@ -216,21 +217,19 @@ class PlanarJuggler(HybridModel):
             admissible=sym.function("admissible", xs, -w_n),  # ball approaches the paddle
             doc="ball meets the mirror-law paddle, d = n·(x, y) = 0; v⁺ = v⁻ − (1 + e) w_n n",
         )
-        dropped = Transition(
-            name="ball dropped (not thrown up by the paddle)",
-            guard=sym.function("guard", xs, y + DROP_DEPTH),
-            direction=-1,
-            reset=None,
-            target=None,
-            doc=f"y < −{DROP_DEPTH:g} m: the ball fell past the paddle",
+        dropped = fall(
+            sym,
+            xs,
+            "ball dropped (not thrown up by the paddle)",
+            y + DROP_DEPTH,
+            f"y < −{DROP_DEPTH:g} m: the ball fell past the paddle",
         )
-        over = Transition(
-            name="ball crossed over the pivot",
-            guard=sym.function("guard", xs, x),
-            direction=-1,
-            reset=None,
-            target=None,
-            doc="x = 0: the ball left the paddle's right arm (the mirror law needs x > 0)",
+        over = fall(
+            sym,
+            xs,
+            "ball crossed over the pivot",
+            x,
+            "x = 0: the ball left the paddle's right arm (the mirror law needs x > 0)",
         )
         # The ball stays above the paddle between impacts: its distance d = n·(x, y) from the
         # paddle line is zero at the impact that starts a flight (it must rise at once) and at the
