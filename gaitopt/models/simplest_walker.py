@@ -85,6 +85,10 @@ class SimplestWalker(HybridModel):
         high=0.05,
     )
 
+    # Range: the long-step gait exists at the default slope over all of it (solved and verified
+    # at k = 0, 0.1, 0.5, 1, 2, 5, 10: step period 3.88 → 0.99 τ); its first period doubling
+    # moves to steeper slopes with k (problems/simplest_walker_pd_curve.py) and leaves the
+    # slope range (0.05 rad) near k ≈ 0.685.
     hip_stiffness: float = parameter(
         0.0,
         unit="m_f*g*l/rad",
