@@ -71,6 +71,7 @@ def optimize_gait(
     tol: float = 1e-8,
     verify: bool = True,
     guess: OptimalGait | None = None,
+    scheduler: str | None = None,
 ) -> OptimalGait:
     """Synthesise the optimal gait of an actuated hybrid model.
 
@@ -107,6 +108,10 @@ def optimize_gait(
         Re-simulate the optimum and compute the multipliers (always, unless False for speed).
     guess : OptimalGait, optional
         A previous optimum to warm start from (a library of gaits).
+    scheduler : str, optional
+        Run the starts on Dask (``"local"``: a local cluster; or a scheduler address), as
+        :func:`gaitopt.sweep.sweep` does (:func:`gaitopt.optimize.library.dask_starts`); the
+        minima and the refined optimum are those of the serial run.  Default: serially.
 
     Returns
     -------
@@ -125,7 +130,14 @@ def optimize_gait(
     )
     indices = _start_indices(starts)
     return solve_problem(
-        problem, starts=indices, seed=seed, mesh=mesh, tol=tol, verify=verify, guess=guess
+        problem,
+        starts=indices,
+        seed=seed,
+        mesh=mesh,
+        tol=tol,
+        verify=verify,
+        guess=guess,
+        scheduler=scheduler,
     )
 
 
@@ -307,6 +319,24 @@ def _converged(stats: dict[str, Any]) -> bool:
     return bool(stats.get("success")) or stats.get("return_status") == "Solved_To_Acceptable_Level"
 
 
+def attempt(
+    col: Collocation, problem: GaitProblem, start: int, seed: int, guess: OptimalGait | None
+) -> dict[str, Any]:
+    """One start of the multi-start on the initial mesh: ``{"start", "w", "stats", "ok"}`` and
+    ``cost``, ``s``, ``period`` if IPOPT converged, else ``violation`` (worst group, size)."""
+    p = problem.model.p
+    w0 = _start_guess(col, problem, start, seed, guess)
+    w, stats = _run(col, w0, p)
+    ok = bool(_converged(stats) and np.all(np.isfinite(w)))
+    entry: dict[str, Any] = {"start": start, "w": w, "stats": stats, "ok": ok}
+    if ok:
+        sol = col.unpack(w, p)
+        entry.update(cost=sol["cost"], s=sol["s"], period=sol["period"])
+    else:
+        entry["violation"] = _violation(col, w, p)
+    return entry
+
+
 def solve_problem(
     problem: GaitProblem,
     *,
@@ -316,6 +346,7 @@ def solve_problem(
     tol: float = 1e-8,
     verify: bool = True,
     guess: OptimalGait | None = None,
+    scheduler: str | None = None,
 ) -> OptimalGait:
     """Solve a :class:`GaitProblem` (see :func:`optimize_gait`)."""
     t_start = time.perf_counter()
@@ -324,18 +355,12 @@ def solve_problem(
     mesh = mesh or DEFAULT_MESH
     col = Collocation(problem, mesh)
     indices = _start_indices(starts)
-    runs = []
-    for start in indices:
-        w0 = _start_guess(col, problem, start, seed, guess)
-        w, stats = _run(col, w0, p)
-        ok = _converged(stats) and np.all(np.isfinite(w))
-        entry = {"start": start, "w": w, "stats": stats, "ok": ok}
-        if ok:
-            sol = col.unpack(w, p)
-            entry.update(cost=sol["cost"], s=sol["s"], period=sol["period"])
-        else:
-            entry["violation"] = _violation(col, w, p)
-        runs.append(entry)
+    if scheduler is not None:  # the same attempts, on Dask workers
+        from .library import dask_starts
+
+        runs = dask_starts(problem, mesh, indices, seed, scheduler, guess)
+    else:
+        runs = [attempt(col, problem, start, seed, guess) for start in indices]
 
     minima: list[dict[str, Any]] = []
     for run in runs:
@@ -417,6 +442,8 @@ def solve_problem(
             break
     disc_error = max(cost_error, orbit_error)
     result = _certify(problem, col, w, stats, verify=verify)
+    # The final transcription and its solution (the stabilising design differentiates it).
+    result.transcription = (col, w)  # type: ignore[attr-defined]
     result.discretisation_error = disc_error if np.isfinite(disc_error) else None
     result.discretisation = {
         "intervals": col.N,
