@@ -98,7 +98,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import casadi as ca
 
@@ -139,6 +139,26 @@ INPUT_MATRIX = (
     (0.0, 0.0, 1.0, -1.0),
     (0.0, 0.0, 0.0, 1.0),
 )
+
+
+def _mass(value: float, doc: str) -> Any:
+    """A link mass (kg, in (0, 1e4]) from OptimTraj."""
+    return parameter(value, unit="kg", doc=doc, source=_OPTIMTRAJ, low=0.0, high=1e4, low_open=True)
+
+
+def _inertia(value: float, doc: str) -> Any:
+    """A link's moment of inertia about its centre of mass (kg·m², in [0, 1e4]) from OptimTraj."""
+    return parameter(value, unit="kg*m^2", doc=doc, source=_OPTIMTRAJ, low=0.0, high=1e4)
+
+
+def _length(value: float, doc: str) -> Any:
+    """A link length (m, in (0, 10]) from OptimTraj."""
+    return parameter(value, unit="m", doc=doc, source=_OPTIMTRAJ, low=0.0, high=10.0, low_open=True)
+
+
+def _com(value: float, doc: str) -> Any:
+    """A centre-of-mass distance along a link (m, in [0, 10]) from OptimTraj."""
+    return parameter(value, unit="m", doc=doc, source=_OPTIMTRAJ, low=0.0, high=10.0)
 
 
 def _up(angle: ca.SX) -> ca.SX:
@@ -239,101 +259,27 @@ class FiveLinkBiped(HybridModel):
         "swing_knee": ("swing_thigh", "swing_shank"),
     }
 
-    mass_shank: float = parameter(
-        3.2,
-        unit="kg",
-        doc="shank (tibia) mass m1 = m5",
-        source=_OPTIMTRAJ,
-        low=0.0,
-        high=1e4,
-        low_open=True,
+    mass_shank: float = _mass(3.2, "shank (tibia) mass m1 = m5")
+    mass_thigh: float = _mass(6.8, "thigh (femur) mass m2 = m4")
+    mass_torso: float = _mass(20.0, "torso mass m3")
+    inertia_shank: float = _inertia(
+        0.93, "shank moment of inertia about its centre of mass I1 = I5"
     )
-    mass_thigh: float = parameter(
-        6.8,
-        unit="kg",
-        doc="thigh (femur) mass m2 = m4",
-        source=_OPTIMTRAJ,
-        low=0.0,
-        high=1e4,
-        low_open=True,
+    inertia_thigh: float = _inertia(
+        1.08, "thigh moment of inertia about its centre of mass I2 = I4"
     )
-    mass_torso: float = parameter(
-        20.0, unit="kg", doc="torso mass m3", source=_OPTIMTRAJ, low=0.0, high=1e4, low_open=True
+    inertia_torso: float = _inertia(2.22, "torso moment of inertia about its centre of mass I3")
+    length_shank: float = _length(0.4, "shank length l1 = l5 (foot to knee)")
+    length_thigh: float = _length(0.4, "thigh length l2 = l4 (knee to hip)")
+    length_torso: float = _length(0.625, "torso length l3 (hip to top)")
+    com_shank: float = _com(
+        0.128, "shank centre of mass below the knee c1 = c5 (at most the shank length)"
     )
-    inertia_shank: float = parameter(
-        0.93,
-        unit="kg*m^2",
-        doc="shank moment of inertia about its centre of mass I1 = I5",
-        source=_OPTIMTRAJ,
-        low=0.0,
-        high=1e4,
+    com_thigh: float = _com(
+        0.163, "thigh centre of mass below the hip c2 = c4 (at most the thigh length)"
     )
-    inertia_thigh: float = parameter(
-        1.08,
-        unit="kg*m^2",
-        doc="thigh moment of inertia about its centre of mass I2 = I4",
-        source=_OPTIMTRAJ,
-        low=0.0,
-        high=1e4,
-    )
-    inertia_torso: float = parameter(
-        2.22,
-        unit="kg*m^2",
-        doc="torso moment of inertia about its centre of mass I3",
-        source=_OPTIMTRAJ,
-        low=0.0,
-        high=1e4,
-    )
-    length_shank: float = parameter(
-        0.4,
-        unit="m",
-        doc="shank length l1 = l5 (foot to knee)",
-        source=_OPTIMTRAJ,
-        low=0.0,
-        high=10.0,
-        low_open=True,
-    )
-    length_thigh: float = parameter(
-        0.4,
-        unit="m",
-        doc="thigh length l2 = l4 (knee to hip)",
-        source=_OPTIMTRAJ,
-        low=0.0,
-        high=10.0,
-        low_open=True,
-    )
-    length_torso: float = parameter(
-        0.625,
-        unit="m",
-        doc="torso length l3 (hip to top)",
-        source=_OPTIMTRAJ,
-        low=0.0,
-        high=10.0,
-        low_open=True,
-    )
-    com_shank: float = parameter(
-        0.128,
-        unit="m",
-        doc="shank centre of mass below the knee c1 = c5 (at most the shank length)",
-        source=_OPTIMTRAJ,
-        low=0.0,
-        high=10.0,
-    )
-    com_thigh: float = parameter(
-        0.163,
-        unit="m",
-        doc="thigh centre of mass below the hip c2 = c4 (at most the thigh length)",
-        source=_OPTIMTRAJ,
-        low=0.0,
-        high=10.0,
-    )
-    com_torso: float = parameter(
-        0.2,
-        unit="m",
-        doc="torso centre of mass below the top of the torso c3 (at most the torso length)",
-        source=_OPTIMTRAJ,
-        low=0.0,
-        high=10.0,
+    com_torso: float = _com(
+        0.2, "torso centre of mass below the top of the torso c3 (at most the torso length)"
     )
     gravity: float = gravity_parameter(_OPTIMTRAJ)
     slope: float = parameter(
