@@ -570,7 +570,7 @@ def _integrate_phase(funcs: _PhaseFunctions, solver_cls, t0, x0, rtol, atol, max
     ts = [t0]
     interpolants = []
     while True:
-        message = solver.step()
+        solver.step()
         if solver.status == "failed":
             return OdeSolution(ts + [ts[-1]], interpolants or [None]), None, None, "failed"
         t_old, t_new = solver.t_old, solver.t
@@ -628,5 +628,4 @@ def _integrate_phase(funcs: _PhaseFunctions, solver_cls, t0, x0, rtol, atol, max
             return OdeSolution(ts, interpolants), best[1], best[2], None
         ts.append(t_new)
         if solver.status == "finished":
-            del message
             return OdeSolution(ts, interpolants), None, None, "timeout"

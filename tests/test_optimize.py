@@ -122,7 +122,6 @@ def test_cost_converges_fast_under_refinement():
         col = Collocation(problem, RadauMesh(intervals, 3))
         gait = optimize_gait(problem.model, mesh=col.mesh, tol=1.0, verify=False, **LEVEL)
         costs.append(gait.cost)
-    del col
     d1, d2 = abs(costs[1] - costs[0]), abs(costs[2] - costs[1])
     assert d2 < d1 / 16
 

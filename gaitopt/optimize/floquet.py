@@ -84,7 +84,6 @@ def return_map_jacobian(col: Collocation, w: np.ndarray, p_model: np.ndarray) ->
     n_cycle = len(model.phases)
     s = sol["s"]
     L = np.asarray(_lift_jacobian(model.section.lift)(s, p), dtype=float)
-    n0 = model.phases[0].n
     M = np.vstack([L, np.zeros((1, L.shape[1]))])  # (δx, δt) per unit δs
     for k, i in enumerate(col.chain):
         phase = model.phases[i]
@@ -117,7 +116,6 @@ def return_map_jacobian(col: Collocation, w: np.ndarray, p_model: np.ndarray) ->
         M = step @ M
         if (k + 1) % n_cycle == 0:
             M[-1, :] = 0.0  # the feedforward clock restarts at the section
-    del n0
     return M[:-1, :][col.section_index, :]
 
 
