@@ -4,8 +4,9 @@
 
     gaitopt optimize MODEL [--set NAME=VALUE ...] [--cost effort|work|cot] [--fix period=S]
                            [--fix step_length=M] [--fix speed=V] [--bound INPUT=MAX ...]
-                           [--free PARAM ...] [--steps K] [--starts N] [--seed S] [--json]
-                           [--out DIR]
+                           [--free PARAM ...] [--steps K] [--starts N] [--seed S]
+                           [--scheduler ADDRESS] [--stabilise [--q Q] [--r R] [--orbits N]]
+                           [--library NAME=FIRST:LAST:COUNT [--cold K]] [--json] [--out DIR]
 
 ``--json`` prints one object: ``model``, ``params``, ``success``, ``message``, ``cost_kind``,
 ``cost``, ``period``, ``step_length``, ``speed``, ``fixed_point``, ``inputs`` (``{"time": [...],
@@ -15,6 +16,24 @@ the model declares (``input_bounds``, ``state_bounds``: the five-link biped's |u
 |q| ≤ π/2, |q̇| ≤ 10) apply unless ``--bound`` overrides an input's.  ``--out DIR`` writes
 ``optimal.json``, ``inputs.csv``, ``orbit.png``, ``inputs.png`` and ``gait.gif``.  Exit status
 0 optimal gait found and verified, 1 none (the JSON is still printed), 2 bad input.
+
+``--scheduler local`` (or a Dask address) runs the ``--starts`` on Dask
+(:func:`gaitopt.optimize.library.dask_starts`; the same minima as the serial run).
+
+``--stabilise`` designs a per-step input offset for the optimum (step-to-step LQR, weights
+``--q``/``--r``; :func:`gaitopt.optimize.stabilise`) and simulates the closed loop for
+``--orbits`` orbits from perturbed states: the JSON gains a ``stabilisation`` object (gain,
+open- and closed-loop multipliers, the multipliers measured from the simulated closed loop, the
+runs); exit 0 only if the optimum and its stabilisation both succeed.
+
+``--library NAME=FIRST:LAST:COUNT`` continues the optimum in ``period``, ``step_length``,
+``speed`` or a model parameter over ``COUNT`` values, warm starting each from the last
+(:func:`gaitopt.optimize.gait_library`), reports active-set changes and folds located by
+bisection, and checks ``--cold K`` points (default 2) against cold starts (on Dask with
+``--scheduler``).  The JSON is then one object: ``model``, ``params``, ``cost_kind``,
+``success``, ``message``, ``vary``, ``points`` (each: value, cost, period, step length, speed,
+fixed point, multipliers, active constraints, reduced Hessian, time), ``events``,
+``cold_checks``, ``solve_time``; ``--out`` writes ``library.json`` and ``library.csv``.
 
 The command-line helpers come from :mod:`gaitopt.cli` (imported when called, since that module
 registers this one in its ``SUBCOMMANDS``).
@@ -37,7 +56,7 @@ _FIXABLE = ("period", "step_length", "speed")
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the arguments of ``gaitopt optimize``."""
-    from .common import _count, _model_arguments
+    from .common import _count, _model_arguments, _scheduler_address
 
     _model_arguments(parser)
     parser.add_argument(
@@ -66,6 +85,43 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--starts", type=_count(1), default=1, help="seeded multi-start (default 1)"
     )
     parser.add_argument("--seed", type=int, default=0, help="seed of the multi-start (default 0)")
+    parser.add_argument(
+        "--scheduler",
+        type=_scheduler_address,
+        default=None,
+        metavar="ADDRESS",
+        help="run the --starts (or the --library's cold checks) on Dask: 'local' or a scheduler "
+        "address (default: serial)",
+    )
+    parser.add_argument(
+        "--stabilise",
+        action="store_true",
+        help="stabilise the optimum by an input offset per step (LQR) and simulate the closed loop",
+    )
+    parser.add_argument(
+        "--q", metavar="Q", help="--stabilise: LQR state weight, a number or a diagonal (default 1)"
+    )
+    parser.add_argument(
+        "--r", metavar="R", help="--stabilise: LQR offset weight, a number or a diagonal (1e-3)"
+    )
+    parser.add_argument(
+        "--orbits",
+        type=_count(1, 1000, "each orbit is simulated for every perturbed start"),
+        default=20,
+        help="--stabilise: orbits simulated from each perturbed state (default 20)",
+    )
+    parser.add_argument(
+        "--library",
+        metavar="NAME=FIRST:LAST:COUNT",
+        help="continue the optimum in period, step_length, speed or a parameter over COUNT "
+        "values, e.g. step_length=0.2:0.5:7",
+    )
+    parser.add_argument(
+        "--cold",
+        type=_count(0),
+        default=2,
+        help="--library: points checked against cold starts (default 2)",
+    )
     parser.add_argument("--out", metavar="DIR", help="write JSON, CSV and figures to DIR")
 
 
@@ -125,6 +181,9 @@ def run(args: argparse.Namespace) -> int:
 
     model = build_model(args.model, args.set)
     options = _parse(args, model)
+    weights = _weights(args)
+    if args.library is not None:
+        return _run_library(args, model, options)
     try:
         with _solver_output_to_stderr():
             gait = optimize_gait(
@@ -133,11 +192,28 @@ def run(args: argparse.Namespace) -> int:
                 steps=args.steps,
                 starts=args.starts,
                 seed=args.seed,
+                scheduler=args.scheduler,
                 **options,
             )
     except GaitoptInputError as exc:
         raise InputError(str(exc)) from None
+    except OSError as exc:  # a Dask scheduler that cannot be reached
+        if args.scheduler in (None, "local"):
+            raise
+        raise InputError(f"--scheduler {args.scheduler}: cannot reach it ({exc})") from None
     report = gait.to_json(minima=args.starts > 1)
+    stabilised = True
+    if args.stabilise:
+        from ..optimize.stabilise import stabilise
+
+        if gait.success:
+            with _solver_output_to_stderr():
+                result = stabilise(gait, **weights, orbits=args.orbits)
+            report["stabilisation"] = result.to_json()
+            stabilised = result.success
+        else:
+            report["stabilisation"] = {"success": False, "message": "no optimum to stabilise"}
+            stabilised = False
     lost = write_outputs(args.out, lambda folder: _write(gait, report, folder))
     if args.json:
         _print_json(report)
@@ -146,7 +222,151 @@ def run(args: argparse.Namespace) -> int:
     if lost is not None:  # --out failed after the run: the files went elsewhere, said on stderr
         print(lost, file=sys.stderr)
         return EXIT_BAD_INPUT
-    return EXIT_OK if gait.success else EXIT_NOT_FOUND
+    return EXIT_OK if gait.success and stabilised else EXIT_NOT_FOUND
+
+
+def _weights(args: argparse.Namespace) -> dict[str, Any]:
+    """``--q``/``--r`` as :func:`gaitopt.optimize.stabilise` weights (only with --stabilise)."""
+    from .common import InputError, _numbers
+
+    q, r = _numbers("--q", args.q), _numbers("--r", args.r)
+    for option, value in (("--q", q), ("--r", r), ("--orbits", args.orbits != 20 or None)):
+        if value is not None and not args.stabilise:
+            raise InputError(f"{option} applies with --stabilise; add --stabilise")
+    if args.stabilise and args.library is not None:
+        raise InputError("--stabilise applies to one optimum, not a --library; drop one of them")
+    weights: dict[str, Any] = {}
+    for name, value in (("Q", q), ("R", r)):
+        if value is not None:
+            if any(v < 0 for v in value) or (name == "R" and any(v <= 0 for v in value)):
+                option = f"--{name.lower()}"
+                raise InputError(
+                    f"{option} {getattr(args, name.lower())}: weights must be "
+                    f"{'positive' if name == 'R' else 'non-negative'}, e.g. {option} 1"
+                )
+            weights[name] = value if len(value) > 1 else value[0]
+    return weights
+
+
+def _parse_library(args: argparse.Namespace, model: Any, options: dict[str, Any]):
+    """``--library NAME=FIRST:LAST:COUNT`` as (name, values)."""
+    import numpy as np
+
+    from ..optimize.library import CONSTRAINTS
+    from .common import InputError
+
+    item = args.library
+    name, sep, text = (part.strip() for part in item.partition("="))
+    parts = text.split(":")
+    example = "--library step_length=0.2:0.5:7"
+    if not sep or not name or len(parts) != 3:
+        raise InputError(f"--library {item}: expected NAME=FIRST:LAST:COUNT, e.g. {example}")
+    try:
+        first, last = float(parts[0]), float(parts[1])
+        count = int(parts[2])
+    except ValueError:
+        raise InputError(
+            f"--library {item}: FIRST and LAST must be numbers and COUNT an integer, e.g. {example}"
+        ) from None
+    if not (np.isfinite(first) and np.isfinite(last)) or first == last or not 2 <= count <= 200:
+        raise InputError(
+            f"--library {item}: FIRST and LAST must be finite and differ, COUNT in 2..200, "
+            f"e.g. {example}"
+        )
+    choices = (*CONSTRAINTS, *model.params)
+    if name not in choices:
+        raise InputError(
+            f"--library {item}: {name!r} cannot be continued; {did_you_mean(name, choices)}"
+            f"choose period, step_length, speed or a parameter of {model.name}"
+        )
+    if name in CONSTRAINTS and options.get(name) is not None:
+        raise InputError(f"--library {item}: {name} is also fixed by --fix; drop that --fix")
+    if args.starts > 1:
+        raise InputError("--starts applies to one optimum, not a --library; drop one of them")
+    return name, np.linspace(first, last, count)
+
+
+def _run_library(args: argparse.Namespace, model: Any, options: dict[str, Any]) -> int:
+    from ..optimize.library import gait_library
+    from .common import (
+        EXIT_BAD_INPUT,
+        EXIT_NOT_FOUND,
+        EXIT_OK,
+        InputError,
+        _print_json,
+        _solver_output_to_stderr,
+        write_outputs,
+    )
+
+    vary, values = _parse_library(args, model, options)
+    try:
+        with _solver_output_to_stderr():
+            library = gait_library(
+                model,
+                vary,
+                values,
+                args.cost,
+                steps=args.steps,
+                cold=args.cold,
+                scheduler=args.scheduler,
+                **options,
+            )
+    except GaitoptInputError as exc:
+        raise InputError(str(exc)) from None
+    except OSError as exc:
+        if args.scheduler in (None, "local"):
+            raise
+        raise InputError(f"--scheduler {args.scheduler}: cannot reach it ({exc})") from None
+    report = {
+        "model": model.name,
+        "params": model.params,
+        "cost_kind": args.cost,
+        **library.to_json(),
+    }
+    lost = write_outputs(args.out, lambda folder: _write_library(library, report, folder))
+    if args.json:
+        _print_json(report)
+    else:
+        _print_library(report)
+    if lost is not None:
+        print(lost, file=sys.stderr)
+        return EXIT_BAD_INPUT
+    return EXIT_OK if library.success else EXIT_NOT_FOUND
+
+
+def _print_library(report: dict[str, Any]) -> None:
+    from .common import _print_rows
+
+    rows = [
+        ("model", report["model"]),
+        ("success", report["success"]),
+        ("message", report["message"]),
+    ]
+    for pt in report["points"]:
+        cost = "none" if pt["cost"] is None else f"{pt['cost']:.10g}"
+        rows.append((f"{report['vary']} = {pt['value']:.6g}", f"{report['cost_kind']} {cost}"))
+    for e in report["events"]:
+        rows.append((e["kind"], e["message"]))
+    _print_rows(rows)
+
+
+def _write_library(library: Any, report: dict[str, Any], folder: Path) -> None:
+    """library.json and library.csv (each written atomically)."""
+    from ..files import write_csv, write_json
+
+    folder.mkdir(parents=True, exist_ok=True)
+    write_json(report, folder / "library.json")
+    rows = [
+        (pt["value"], pt["cost"], pt["success"], pt["period"], pt["step_length"], pt["speed"],
+         max((abs(complex(*z)) for z in pt["multipliers"]), default=None), pt["time"])
+        for pt in report["points"]
+    ]  # fmt: skip
+    write_csv(
+        [library.vary, "cost", "success", "period_s", "step_length_m", "speed_m_per_s",
+         "max_abs_multiplier", "time_s"],
+        rows,
+        folder / "library.csv",
+    )  # fmt: skip
 
 
 def _print(report: dict[str, Any]) -> None:
