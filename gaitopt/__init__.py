@@ -23,7 +23,7 @@ from .errors import (
 from .hybrid import Constraint, HybridModel, Phase, Section, Transition
 from .models import REGISTRY, model, register, unregister
 from .result import LimitCycle, OrbitArc
-from .shooting import MultipleShooting, find_limit_cycle
+from .shooting import MultipleShooting, ShootingProblem, find_limit_cycle
 from .simulation import Simulation, simulate
 
 __all__ = [
@@ -40,12 +40,15 @@ __all__ = [
     "Branch",
     "SpecialPoint",
     "MultipleShooting",
+    "ShootingProblem",
     "LimitCycle",
     "OrbitArc",
     "simulate",
     "orbital_distance",
     "optimize_gait",
     "OptimalGait",
+    "gait_library",
+    "stabilise",
     "Simulation",
     "HybridModel",
     "Phase",
@@ -68,6 +71,8 @@ _LAZY = {
     "ParameterPath": ".curves",
     "optimize_gait": ".optimize",
     "OptimalGait": ".optimize",
+    "gait_library": ".optimize",
+    "stabilise": ".optimize",
     "orbital_distance": ".orbits",
 }
 

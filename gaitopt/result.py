@@ -96,6 +96,16 @@ class LimitCycle:
     gaits : list of dict
         With ``starts > 1``: every distinct gait the multi-start search found (``fixed_point``,
         ``period``, ``multipliers``, ``stable``, ``starts``: how many starts reached it).
+    problem : ShootingProblem or None
+        The shooting problem solved (:class:`gaitopt.ShootingProblem`): model class,
+        discretisation and cycles; None for a search that never reached the shooting equations.
+    solution : numpy.ndarray or None
+        The solution vector ``w`` of ``problem`` (see :attr:`ShootingProblem.layout`): the warm
+        start of continuation, control design and curve following, which use it as is.
+    evaluation : Evaluation or None
+        The residual and its Jacobians at ``solution`` (``F``, ``F_w`` = ∂F/∂w, ``F_u`` = ∂F/∂u,
+        ``F_p`` = ∂F/∂p, phase ends, guard rates, durations), from the last Newton step: reused
+        for the multipliers, the error estimate and continuation's tangent, never recomputed.
     """
 
     success: bool
@@ -122,6 +132,9 @@ class LimitCycle:
     solve_time: float = float("nan")
     route: str = ""
     gaits: list[dict[str, Any]] = field(default_factory=list)
+    problem: Any = field(default=None, repr=False, compare=False)
+    solution: np.ndarray | None = field(default=None, repr=False, compare=False)
+    evaluation: Any = field(default=None, repr=False, compare=False)
 
     @property
     def x(self) -> np.ndarray:

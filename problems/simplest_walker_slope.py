@@ -13,10 +13,9 @@ small-γ analysis gives the step angle θ* ∝ γ^(1/3).
 Here both families come from continuation (``gaitopt.continuation``), from Garcia's gaits at
 γ = 0.009, up to the end of the slope range with ``cascade=True`` (the period-2, 4, 8, …
 branches born at each period doubling), and down to small γ, where the log-log slope of θ*(γ)
-is fitted and compared with 1/3.  Every period-doubled branch is checked to be born at its
-period doubling (its first orbit next to the parent's and with a multiplier near +1, the square
-of the crossing −1); a branch that is not is replaced by switching with a smaller perturbation
-(see ``_audit_cascade``).
+is fitted and compared with 1/3.  Every period-doubled branch is recorded with whether it was
+born at its period doubling (its first orbit next to the parent's and with a multiplier near
++1, the square of the crossing −1); the library's branch switching keeps only such orbits.
 
     python problems/simplest_walker_slope.py --out results [--fast]
 
@@ -38,7 +37,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import gaitopt  # noqa: E402
-from gaitopt import Branch, GaitoptInputError  # noqa: E402
+from gaitopt import Branch  # noqa: E402
+from gaitopt.continuation.switching import born_at  # noqa: E402
 from gaitopt.files import write_csv, write_json  # noqa: E402
 from gaitopt.plotting import plot_branch, save_figure  # noqa: E402
 
@@ -221,8 +221,9 @@ def main(argv: list[str] | None = None) -> int:
     for name, e in ends.items():
         print(f"{name}-step family: {e['message']}")
     for label, log in (("overview", overview_log), ("resolved cascade", cascade_log)):
-        for entry in log["audit"]:
-            print(f"{label}: {entry['note']}")
+        for child in log["children"]:
+            if not child["born_at_pd"]:
+                print(f"{label}: the period-{child['steps']} branch is not born at its PD")
     print(
         f"continuation up {t_up:.1f} s, cascade {t_cascade:.1f} s, down {t_down:.1f} s; "
         f"wrote {folder}"
@@ -252,8 +253,9 @@ def _joined(down: list, up: Branch, down_message: str) -> Branch:
 
 
 def _cascade(start, to: float, max_period: int, options) -> tuple[Branch, dict]:
-    """``continuation(..., cascade=True)`` from ``start`` to ``to``, then the period-doubled
-    branches audited (:func:`_audit_cascade`); returns the branch and what was found."""
+    """``continuation(..., cascade=True)`` from ``start`` to ``to``; returns the branch and, for
+    each period-doubled branch, where it starts and whether it was born at its PD (next to the
+    parent orbit with a multiplier near +1: :func:`gaitopt.continuation.switching.born_at`)."""
     branch = gaitopt.continuation(
         start.model,
         "slope",
@@ -263,17 +265,21 @@ def _cascade(start, to: float, max_period: int, options) -> tuple[Branch, dict]:
         max_period=max_period,
         options=options,
     )
-    library = [
-        {
-            "steps": b.steps,
-            "first_param": float(b.params[0]),
-            "first_multipliers": b.cycles[0].multipliers,
-        }
-        for b in branch.descendants()[1:]
-    ]
-    audit: list[dict] = []
-    _audit_cascade(branch, to, options, max_period, audit)
-    return branch, {"library_children": library, "audit": audit}
+    children = []
+    for parent in branch.descendants():
+        pds = [sp for sp in parent.special_points if sp.kind == "PD"]
+        for child in parent.children:
+            sp = min(pds, key=lambda sp: abs(sp.param - float(child.params[0])))
+            children.append(
+                {
+                    "steps": child.steps,
+                    "pd": sp.param,
+                    "first_param": float(child.params[0]),
+                    "first_multipliers": child.cycles[0].multipliers,
+                    "born_at_pd": born_at(child.cycles[0], sp.cycle),
+                }
+            )
+    return branch, {"children": children}
 
 
 def _period_doublings(branch: Branch) -> list[dict]:
@@ -284,103 +290,6 @@ def _period_doublings(branch: Branch) -> list[dict]:
         if sp.kind == "PD"
     ]
     return sorted(pds, key=lambda d: d["period"])
-
-
-def _born_at(child: Branch, sp) -> bool:
-    """Whether ``child`` is the period-2k orbit born at the period doubling ``sp``: it starts
-    next to it (in the parameter and on the section) with a multiplier near +1 (the square of
-    the parent's −1)."""
-    first = child.cycles[0]
-    near = abs(float(getattr(first.model, child.param)) - sp.param) <= 0.02 * abs(sp.param)
-    close = np.max(np.abs(first.section_point - sp.cycle.section_point)) < 0.05
-    return bool(near and close and np.min(np.abs(first.multipliers - 1)) < 0.25)
-
-
-def _switch(sp, to: float, options, max_period: int) -> Branch | None:
-    """Branch switching with small perturbations: the period-k gait at the PD plus ε v (v the
-    eigenvector of −1, ε = a·sqrt(offset)), solved as a period-2k gait just past the PD, kept only
-    if born there (:func:`_born_at` on the solved orbit), then followed."""
-    cycle = sp.cycle
-    mu, vectors = np.linalg.eig(cycle.jacobian)
-    v = np.real(vectors[:, int(np.argmin(np.abs(mu + 1)))])
-    v /= np.max(np.abs(v))
-    for offset in (1e-4, 1e-3, 1e-5):
-        model = cycle.model.replace(slope=sp.param * (1 + offset))
-        for amplitude in (0.03, 0.1, 0.3):
-            guess = dict(
-                zip(
-                    cycle.section_coordinates,
-                    cycle.section_point + amplitude * math.sqrt(offset) * v,
-                    strict=True,
-                )
-            )
-            try:
-                doubled = gaitopt.find_limit_cycle(model, guess, steps=2 * cycle.steps)
-            except GaitoptInputError:
-                continue
-            if doubled.success and np.min(np.abs(doubled.multipliers - 1)) < 0.25:
-                return gaitopt.continuation(
-                    model,
-                    "slope",
-                    to=to,
-                    start=doubled,
-                    steps=doubled.steps,
-                    cascade=False,
-                    options=options,
-                )
-    return None
-
-
-def _audit_cascade(branch: Branch, to: float, options, max_period: int, log: list) -> None:
-    """Keep each period-doubled child that is born at its PD; replace the others (and switch at
-    PDs that have no child) with :func:`_switch`; recurse down the cascade.
-
-    Workaround: the library's switching (``_switch_at_period_doubling``, perturbation amplitude
-    0.3·sqrt(1e-3) first) can land on an unrelated period-2k orbit; here at the simplest walker's
-    second PD (γ = 0.0176694) it returns a period-4 orbit with multipliers (71.5, 2.5e-4)."""
-    children = list(branch.children)
-    kept = []
-    for sp in branch.special_points:
-        if sp.kind != "PD" or 2 * branch.steps > max_period:
-            continue
-        born = [c for c in children if _born_at(c, sp)]
-        if born:
-            kept.append(born[0])
-            continue
-        rejected = [
-            {
-                "steps": c.steps,
-                "first_param": float(c.params[0]),
-                "first_multipliers": c.cycles[0].multipliers,
-            }
-            for c in children
-            if c.steps == 2 * branch.steps
-        ]
-        child = _switch(sp, to, options, max_period)
-        log.append(
-            {
-                "pd": sp.param,
-                "period": branch.steps,
-                "rejected_library_children": rejected,
-                "switched": child is not None,
-                "note": (
-                    f"PD {branch.steps}→{2 * branch.steps} at {sp.param:.8f}: "
-                    + (
-                        f"library child rejected (first multipliers "
-                        f"{', '.join(f'{abs(z):.3g}' for z in rejected[0]['first_multipliers'])}, "
-                        "not born at the PD); "
-                        if rejected
-                        else "on a branch switched by this study (followed with cascade=False); "
-                    )
-                    + ("switched with a small perturbation" if child else "switching failed")
-                ),
-            }
-        )
-        if child is not None:
-            kept.append(child)
-    branch.children[:] = kept
-    for child in kept:
-        _audit_cascade(child, to, options, max_period, log)
 
 
 def _stable_interval(branch: Branch) -> list[float] | None:

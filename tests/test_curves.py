@@ -12,9 +12,8 @@ from gaitopt import GaitoptInputError, ParameterError, ParameterPath
 from gaitopt.cli import main
 from gaitopt.continuation import PseudoArclength, continuation
 from gaitopt.curves import bifurcation_curve, curve_from
-from gaitopt.curves.follow import _w_of
 from gaitopt.curves.system import Parametrisation, augmented_system, bordering
-from gaitopt.shooting import transcription
+from gaitopt.shooting import shooting_problem
 
 MASS_HIP_AT = 12.0  # kg: an intermediate point located exactly on the curve
 MASS_HIP_TO = 14.0  # kg: the curve's end
@@ -70,7 +69,7 @@ def test_augmented_jacobian_matches_finite_differences(kind):
     )
     par = Parametrisation.build(cycle.model, paths, cycle.inputs)
     b, c = bordering(kind, cycle.jacobian)
-    y = np.concatenate([_w_of(cycle, system.tr), par.lam0 / par.scale])
+    y = np.concatenate([system.problem.unknowns_from_cycle(cycle), par.lam0 / par.scale])
     _, J, A = system.evaluate(y, b, c, par)
     np.testing.assert_allclose(np.linalg.eigvals(A), cycle.multipliers, atol=1e-10)
     fd = np.zeros_like(J)
@@ -264,9 +263,9 @@ def test_lift_off_rate_condition_matches_the_constraint_rate():
     from gaitopt.hybrid import rate_along
 
     cycle = gaitopt.find_limit_cycle(gaitopt.model("kneed_walker"))
-    tr = transcription(type(cycle.model), cycle.discretisation, 1)
+    problem = shooting_problem(type(cycle.model), cycle.discretisation, 1)
     g = constraint_condition(type(cycle.model), cycle.discretisation, 1, ("lift_off", 0, 0))
-    value = float(g(_w_of(cycle, tr), cycle.inputs, cycle.model.p))
+    value = float(g(problem.unknowns_from_cycle(cycle), cycle.inputs, cycle.model.p))
     phase = cycle.model.phases[0]
     direct = float(
         rate_along(phase.flow, phase.constraints[0].function)(

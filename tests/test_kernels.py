@@ -9,25 +9,25 @@ import numpy as np
 import gaitopt
 from gaitopt.kernels import ModelKernels
 from gaitopt.kernels.assemble import Assembly
-from gaitopt.shooting import MultipleShooting, transcription
+from gaitopt.shooting import MultipleShooting, shooting_problem
 
 
 def _point(name: str, cycles: int = 1):
     model = gaitopt.model(name)
-    tr = transcription(type(model), MultipleShooting(*type(model).mesh), cycles)
+    problem = shooting_problem(type(model), MultipleShooting(*type(model).mesh), cycles)
     rng = np.random.default_rng(1)
-    w = np.zeros(tr.size)
-    w[: tr.m] = model.section_vector({})
-    nodes = np.tile(model.lift(w[: tr.m]), tr.disc.segments * len(tr.chain))
-    for kind, _, off, shape in tr.layout:  # a plausible point: the start state, short phases
+    w = np.zeros(problem.size)
+    w[: problem.m] = model.section_vector({})
+    nodes = np.tile(model.lift(w[: problem.m]), problem.disc.segments * len(problem.chain))
+    for kind, _, off, shape in problem.layout:  # a plausible point: the start state, short phases
         size = int(np.prod(shape)) if shape else 1
         w[off : off + size] = nodes[:size] if kind == "nodes" else 0.3
-    w += 1e-3 * rng.standard_normal(tr.size)
-    return model, tr, w
+    w += 1e-3 * rng.standard_normal(problem.size)
+    return model, problem, w
 
 
-def _compare(evaluation, tr, w, u, p, tol):
-    F, F_w, F_p, F_u = (np.asarray(v, dtype=float) for v in tr.residual_jacobians(w, u, p))
+def _compare(evaluation, problem, w, u, p, tol):
+    F, F_w, F_p, F_u = (np.asarray(v, dtype=float) for v in problem.residual_jacobians(w, u, p))
     # Independent method: CasADi's AD through the whole chain (the shooting graph).
     assert np.max(np.abs(evaluation.F - F.ravel())) <= tol
     assert np.max(np.abs(evaluation.F_w - F_w)) <= tol * (1 + np.max(np.abs(F_w)))
@@ -40,21 +40,21 @@ def test_assembled_jacobian_matches_ad_of_the_whole_chain():
     # Two phases (kneed walker) and a period-2 chain (compass gait): the block assembly must give
     # CasADi's AD Jacobian to rounding (1e-10 relative; measured ~1e-13).
     for name, cycles in (("compass_gait", 2), ("kneed_walker", 1)):
-        model, tr, w = _point(name, cycles)
-        _compare(tr.evaluate(w, model.nominal_input(), model.p), tr, w, model.nominal_input(),
-                 model.p, 1e-10)  # fmt: skip
+        model, problem, w = _point(name, cycles)
+        u = model.nominal_input()
+        _compare(problem.evaluate(w, u, model.p), problem, w, u, model.p, 1e-10)
 
 
 def test_interpreted_fallback_without_a_compiler(monkeypatch, tmp_path):
     # A missing compiler: the same SX functions run interpreted, with the same results (1e-12).
     monkeypatch.setenv("GAITOPT_CC", str(tmp_path / "no-such-compiler"))
     monkeypatch.setenv("GAITOPT_CACHE", str(tmp_path / "cache"))
-    model, tr, w = _point("vanderpol")
+    model, problem, w = _point("vanderpol")
     kern = ModelKernels(type(model), verbose=False)
     assert not kern.compiled
     assert not (tmp_path / "cache").exists()
     u, p = model.nominal_input(), model.p
-    compiled = Assembly(tr)(w, u, p)
+    compiled = Assembly(problem)(w, u, p)
     import gaitopt.kernels as kernels
 
     monkeypatch.setattr(kernels, "model_kernels", lambda cls: kern)
@@ -62,7 +62,7 @@ def test_interpreted_fallback_without_a_compiler(monkeypatch, tmp_path):
     try:
         interpreted = kernels.assemble.Assembly.__new__(kernels.assemble.Assembly)
         monkeypatch.setattr(kernels.assemble, "model_kernels", lambda cls: kern)
-        interpreted.__init__(tr)
+        interpreted.__init__(problem)
         assert not interpreted.compiled
         other = interpreted(w, u, p)
     finally:

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import gaitopt
-from gaitopt.shooting import transcription
+from gaitopt.shooting import shooting_problem
 
 # -- unilateral constraints ----------------------------------------------------------------------
 
@@ -99,10 +99,12 @@ def test_dense_constraint_check_rejects_an_orbit_through_the_ground():
     # certify's dense check on its own: the kneed walker's default gait with the slope raised in
     # the parameter vector only (the orbit unchanged) puts the swing foot under the slope.
     gait = gaitopt.find_limit_cycle(gaitopt.model("kneed_walker"))
-    tr = transcription(type(gait.model), gait.discretisation, 1)
+    problem = shooting_problem(type(gait.model), gait.discretisation, 1)
     steeper = gait.model.replace(slope=0.25)
-    problem = gaitopt.shooting.check_constraints(steeper, tr, gait.orbit, np.zeros(0), steeper.p)
-    assert problem is not None and "swing foot above the slope" in problem
+    defect = gaitopt.shooting.check_constraints(
+        steeper, problem, gait.orbit, np.zeros(0), steeper.p
+    )
+    assert defect is not None and "swing foot above the slope" in defect
 
 
 # -- the gait the user means ---------------------------------------------------------------------

@@ -34,8 +34,8 @@ def policy_function(solver: Deadbeat, steps: Sequence[int] | None = None) -> ca.
     defaults to the fewest steps per phase (1, 2, 4, …) whose end state on the gait changes
     by less than 1e-9 (relative) when they are doubled; a ballistic flight needs one.
     """
-    model, tr = solver.model, solver.tr
-    phases = [model.phases[i] for i in tr.chain]
+    model, shooting = solver.model, solver.shooting
+    phases = [model.phases[i] for i in shooting.chain]
     steps = list(steps) if steps is not None else _policy_steps(solver)
     if len(steps) != len(phases):
         raise GaitoptInputError(f"`steps` needs {len(phases)} entries, got {len(steps)}")
@@ -52,7 +52,7 @@ def policy_function(solver: Deadbeat, steps: Sequence[int] | None = None) -> ca.
         tr0 = phase.transitions[0]
         eq.append(tr0.guard(x, u, p))  # each phase ends on its guard
         x = tr0.reset(x, u, p)
-    eq.append(x[tr.section_index] - s_t)  # the next return is the target
+    eq.append(x[shooting.section_index] - s_t)  # the next return is the target
     v = ca.vertcat(T, u)
     F = ca.Function("deadbeat_single_shooting", [v, s, s_t, p], [ca.vertcat(*eq)])
     newton = ca.rootfinder(

@@ -13,7 +13,7 @@ import casadi as ca
 import numpy as np
 
 from ..result import LimitCycle
-from ..shooting import transcription
+from ..shooting import shooting_problem
 from .errors import ControlDesignError
 from .linearisation import _fmt_point
 from .policy import Decision, _fmt_u
@@ -53,31 +53,26 @@ class Deadbeat:
         self.cycle = cycle
         self.model = cycle.model
         model_cls = type(cycle.model)
-        self.tr = tr = transcription(model_cls, cycle.discretisation, cycle.steps)
-        self.m, self.n_u = tr.m, len(model_cls.inputs)
-        self.n_z = tr.size - tr.m
+        self.shooting = shooting = shooting_problem(model_cls, cycle.discretisation, cycle.steps)
+        self.m, self.n_u = shooting.m, len(model_cls.inputs)
+        self.n_z = shooting.size - shooting.m
         self._guess = np.concatenate([self._orbit_unknowns(), np.asarray(cycle.inputs, float)])
 
     def _orbit_unknowns(self) -> np.ndarray:
-        """The shooting unknowns ``z`` of the solved gait (segment starts read off its orbit,
-        which was sampled on the same mesh)."""
-        tr, cycle = self.tr, self.cycle
-        S, q = tr.disc.segments, tr.disc.dense
-        nodes = [arc.x[:, 0 : S * q : q] for arc in cycle.orbit]
-        w = tr.pack(cycle.section_point, nodes, [float(d) for d in cycle.durations])
-        return w[tr.m :]
+        """The shooting unknowns ``z`` of the solved gait (its solution vector after ``s``)."""
+        return self.shooting.unknowns_from_cycle(self.cycle)[self.shooting.m :]
 
     @cached_property
     def equations(self) -> ca.Function:
         """``F(v, s, s_target, p)`` with ``v = [z; u]``: the step's shooting equations and
         ``P(s, u) − s_target``."""
-        tr = self.tr
+        shooting = self.shooting
         v = ca.MX.sym("v", self.n_z + self.n_u)
         s = ca.MX.sym("s", self.m)
         s_t = ca.MX.sym("s_target", self.m)
         p = ca.MX.sym("p", self.model.p.size)
-        F = tr.residual(ca.vertcat(s, v[: self.n_z]), v[self.n_z :], p)
-        G, periodicity = F[: tr.n_g], F[tr.n_g :]
+        F = shooting.residual(ca.vertcat(s, v[: self.n_z]), v[self.n_z :], p)
+        G, periodicity = F[: shooting.n_g], F[shooting.n_g :]
         eq = ca.vertcat(G, periodicity + s - s_t)  # periodicity = P − s: P = s_target instead
         return ca.Function(
             "deadbeat_equations", [v, s, s_t, p], [eq], ["v", "s", "s_target", "p"], ["F"]
@@ -197,17 +192,17 @@ class Deadbeat:
 
     @cached_property
     def _checks(self) -> ca.Function:
-        return self.tr.checks.expand()
+        return self.shooting.checks.expand()
 
     def _check(self, s, v, u, p) -> str | None:
         """Positive durations; each phase ends on its guard admissibly, in its direction."""
-        tr = self.tr
+        shooting = self.shooting
         w = np.concatenate([s, v[: self.n_z]])
         outputs = self._checks(w, u, p)
         ends, dg, adm, durations = (np.asarray(a, dtype=float).ravel() for a in outputs)
         del ends
         model = self.model
-        for k, i in enumerate(tr.chain):
+        for k, i in enumerate(shooting.chain):
             phase = model.phases[i]
             transition = phase.transitions[0]
             if not durations[k] > 0:

@@ -5,7 +5,7 @@ differentiation, second derivatives of the flow included).
 Unknowns ``y = (w, ℓ₁, ℓ₂)``: the shooting unknowns ``w`` of :mod:`gaitopt.shooting` and the two
 scaled curve parameters ``ℓᵢ = λᵢ / scaleᵢ``.  Equations ``H(y) = (F(w, u, p), g(w, u, p))``:
 
-* ``F = 0`` — the orbit (multiple shooting, :class:`gaitopt.shooting.Transcription`);
+* ``F = 0`` — the orbit (multiple shooting, :class:`gaitopt.shooting.ShootingProblem`);
 * ``g = 0`` — the defining condition, *minimally augmented* (Govaerts, "Numerical Methods for
   Bifurcations of Dynamical Equilibria", SIAM 2000, §4.3; Kuznetsov, "Elements of Applied
   Bifurcation Theory", 3rd ed., §10.2.2): with ``A = ∂P/∂s`` the return map's Jacobian in section
@@ -52,7 +52,7 @@ import numpy as np
 
 from ..errors import GaitoptInputError, ParameterError, did_you_mean
 from ..hybrid import HybridModel
-from ..shooting import MultipleShooting, Transcription, transcription
+from ..shooting import MultipleShooting, ShootingProblem, shooting_problem
 
 __all__ = [
     "CURVE_KINDS",
@@ -319,7 +319,7 @@ class AugmentedSystem:
 
     Attributes
     ----------
-    tr : Transcription
+    problem : ShootingProblem
         The shooting equations.
     kind : str
         ``"PD"``, ``"LP"``, ``"NS"`` or ``"boundary"``.
@@ -335,7 +335,7 @@ class AugmentedSystem:
         :meth:`evaluate`).
     """
 
-    tr: Transcription
+    problem: ShootingProblem
     kind: str
     boundary: tuple | None
     builder: Any = field(repr=False, compare=False)
@@ -348,12 +348,12 @@ class AugmentedSystem:
     @property
     def kernel_path(self) -> bool:
         """Whether the condition comes from the compiled shooting kernels alone."""
-        return self.kind in ("PD", "LP") and self.tr.assembly() is not None
+        return self.kind in ("PD", "LP") and self.problem.assembly() is not None
 
     @property
     def border(self) -> int:
         """Length of the bordering vectors."""
-        return border_size(self.kind, self.tr.m)
+        return border_size(self.kind, self.problem.m)
 
     @property
     def extra(self) -> int:
@@ -372,11 +372,11 @@ class AugmentedSystem:
         False the condition's row of ``∂H/∂y`` may be left as NaN where that saves work (the
         kernel path: two kernel evaluations fewer), for a corrector that reuses an older row.
         """
-        N = self.tr.size
+        N = self.problem.size
         wz, w, ell = y[:-2], y[:N], y[-2:]
         lam = ell * par.scale
         u, p = par.u(lam), par.p(lam)
-        ev = self.tr.evaluate(w, u, p)  # compiled kernels where they exist
+        ev = self.problem.evaluate(w, u, p)  # compiled kernels where they exist
         F_ell = (ev.F_p @ par.K + ev.F_u @ par.D) * par.scale  # ∂F/∂ℓ = (F_p K + F_u D) diag(s)
         if self.kernel_path:
             g, grad, A = self._bordered_from_kernels(w, u, p, ev, F_ell, b, c, par, gradient)
@@ -384,11 +384,11 @@ class AugmentedSystem:
             g, grad, A = self.function(wz, ell, b, c, *par.inputs().values())
         g = np.asarray(g, dtype=float).ravel()
         if self.kind == "boundary":  # A from the compiled shooting Jacobian (no 2nd derivatives)
-            A = return_map_jacobian(self.tr, ev.F_w)
+            A = return_map_jacobian(self.problem, ev.F_w)
         F_block = np.hstack([ev.F_w, np.zeros((N, self.extra)), F_ell])
         H = np.concatenate([np.asarray(ev.F, dtype=float).ravel(), g])
         J = np.vstack([F_block, np.asarray(grad, dtype=float).reshape(g.size, y.size)])
-        return H, J, np.asarray(A, dtype=float).reshape(self.tr.m, self.tr.m)
+        return H, J, np.asarray(A, dtype=float).reshape(self.problem.m, self.problem.m)
 
     def _bordered_from_kernels(self, w, u, p, ev, F_ell, b, c, par, gradient=True):
         """``g``, ``∂g/∂y`` and ``A`` of a PD or LP curve from the compiled shooting Jacobian.
@@ -402,7 +402,7 @@ class AugmentedSystem:
         kernel Jacobians (step ``ε``, truncation error ``O(ε²)`` ≈ 1e-10 relative, exact ``g``;
         the Newton corrector needs only the ``g`` to be exact).
         """
-        tr, m, n_g = self.tr, self.tr.m, self.tr.n_g
+        problem, m, n_g = self.problem, self.problem.m, self.problem.n_g
         J = np.array(ev.F_w, dtype=float)
         J[n_g:, :m] += np.eye(m)  # ∂[G; P]/∂w
         G_s, G_z, P_s, P_z = J[:n_g, :m], J[:n_g, m:], J[n_g:, :m], J[n_g:, m:]
@@ -416,15 +416,15 @@ class AugmentedSystem:
         omega_g = np.linalg.solve(K.T, rhs)
         v, g, omega = vg[:m], vg[m], omega_g[:m]
         if not gradient:
-            return g, np.full(tr.size + self.extra + 2, np.nan), A
+            return g, np.full(problem.size + self.extra + 2, np.nan), A
         dw = np.concatenate([v, -GzGs @ v])
         psi = np.concatenate([-np.linalg.solve(G_z.T, P_z.T @ omega) if n_g else [], omega])
         eps = 1e-5 * (1.0 + np.max(np.abs(w))) / max(np.max(np.abs(dw)), 1e-300)
         rows = []
         for sign in (1.0, -1.0):
-            e = tr.evaluate(w + sign * eps * dw, u, p)
+            e = problem.evaluate(w + sign * eps * dw, u, p)
             F_ell_e = (e.F_p @ par.K + e.F_u @ par.D) * par.scale
-            rows.append(psi @ np.hstack([e.F_w, np.zeros((tr.size, self.extra)), F_ell_e]))
+            rows.append(psi @ np.hstack([e.F_w, np.zeros((problem.size, self.extra)), F_ell_e]))
         grad = -(rows[0] - rows[1]) / (2 * eps)
         return g, grad, A
 
@@ -446,24 +446,29 @@ def _augmented_system(model_cls, disc, steps, kind, boundary) -> AugmentedSystem
         raise GaitoptInputError(f"`kind` must be one of {', '.join(CURVE_KINDS)}, got {kind!r}")
     if kind == "boundary" and (boundary is None or boundary[0] not in BOUNDARY_QUANTITIES):
         raise GaitoptInputError(f"a boundary curve needs one of {BOUNDARY_QUANTITIES}")
-    tr = transcription(model_cls, disc, steps)
-    if kind == "NS" and border_size(kind, tr.m) == 0:
+    problem = shooting_problem(model_cls, disc, steps)
+    if kind == "NS" and border_size(kind, problem.m) == 0:
         raise GaitoptInputError(
-            f"{model_cls.name} has {tr.m} section coordinate(s): no complex pair of multipliers, "
-            f"so no Neimark–Sacker curve; follow PD or LP"
+            f"{model_cls.name} has {problem.m} section coordinate(s): no complex pair of "
+            f"multipliers, so no Neimark–Sacker curve; follow PD or LP"
         )
     return AugmentedSystem(
-        tr, kind, boundary, lambda: _condition_function(model_cls, disc, steps, kind, boundary)
+        problem, kind, boundary, lambda: _condition_function(model_cls, disc, steps, kind, boundary)
     )
 
 
 def _condition_function(model_cls, disc, steps, kind, boundary) -> ca.Function:
     """The CasADi function of :attr:`AugmentedSystem.function`."""
-    tr = transcription(model_cls, disc, steps)
-    m, n_g, n_p, n_u = tr.m, tr.n_g, len(model_cls.parameter_specs()), len(model_cls.inputs)
+    problem = shooting_problem(model_cls, disc, steps)
+    m, n_g, n_p, n_u = (
+        problem.m,
+        problem.n_g,
+        len(model_cls.parameter_specs()),
+        len(model_cls.inputs),
+    )
     nb = border_size(kind, m)
-    sym = ca.SX if disc.steps * len(tr.chain) <= _SX_MAX_STEPS else ca.MX
-    w, ell = sym.sym("w", tr.size + n_extra(boundary)), sym.sym("ell", 2)
+    sym = ca.SX if disc.rk_steps * len(problem.chain) <= _SX_MAX_STEPS else ca.MX
+    w, ell = sym.sym("w", problem.size + n_extra(boundary)), sym.sym("ell", 2)
     b, c = sym.sym("b", nb), sym.sym("c", nb)
     p_base, K = sym.sym("p_base", n_p), sym.sym("K", n_p, 2)
     u_base, D = sym.sym("u_base", n_u), sym.sym("D", n_u, 2)
@@ -474,7 +479,7 @@ def _condition_function(model_cls, disc, steps, kind, boundary) -> ca.Function:
     if kind == "boundary":
         A = sym(m, m)  # numerically, from the shooting kernels (AugmentedSystem.evaluate)
     else:
-        J_w, _, _, _ = _symbolic(tr.linearisation, sym)(w[: tr.size], u, p)
+        J_w, _, _, _ = _symbolic(problem.linearisation, sym)(w[: problem.size], u, p)
         # A = P_s − P_z G_z⁻¹ G_s (implicit function theorem; gaitopt.stability.section_jacobians)
         G_s, G_z, P_s, P_z = J_w[:n_g, :m], J_w[:n_g, m:], J_w[n_g:, :m], J_w[n_g:, m:]
         A = P_s - P_z @ ca.solve(G_z, G_s) if n_g else P_s
@@ -482,7 +487,7 @@ def _condition_function(model_cls, disc, steps, kind, boundary) -> ca.Function:
         g = _symbolic(constraint_condition(model_cls, disc, steps, boundary), sym)(w, u, p)
     elif kind == "boundary":
         what, k = boundary[:2]
-        _, dg, adm, durations = _symbolic(tr.checks, sym)(w, u, p)
+        _, dg, adm, durations = _symbolic(problem.checks, sym)(w, u, p)
         g = {"duration": durations, "grazing": dg, "admissible": adm}[what][k]
     else:
         M = singular_matrix(kind, A)
@@ -493,7 +498,7 @@ def _condition_function(model_cls, disc, steps, kind, boundary) -> ca.Function:
     y = ca.vertcat(w, ell)
     # The condition's gradient by reverse mode (one sweep per condition through the second
     # derivatives of the flow, not N forward directions); F's Jacobian comes from the compiled
-    # shooting kernels (``Transcription.evaluate``) and the chain rule through the affine
+    # shooting kernels (``ShootingProblem.evaluate``) and the chain rule through the affine
     # parameter map.
     return ca.Function(
         f"condition_{kind}",
@@ -504,18 +509,18 @@ def _condition_function(model_cls, disc, steps, kind, boundary) -> ca.Function:
     )
 
 
-def return_map_jacobian(tr: Transcription, F_w: np.ndarray) -> np.ndarray:
+def return_map_jacobian(problem: ShootingProblem, F_w: np.ndarray) -> np.ndarray:
     """``A = ∂P/∂s`` from the shooting Jacobian ``∂F/∂w`` (``F = [G; P − s]``; the implicit
     function theorem, :func:`gaitopt.stability.section_jacobians`)."""
     J = np.array(F_w, dtype=float)
-    J[tr.n_g :, : tr.m] += np.eye(tr.m)
+    J[problem.n_g :, : problem.m] += np.eye(problem.m)
     G_s, G_z, P_s, P_z = (
-        J[: tr.n_g, : tr.m],
-        J[: tr.n_g, tr.m :],
-        J[tr.n_g :, : tr.m],
-        J[tr.n_g :, tr.m :],
+        J[: problem.n_g, : problem.m],
+        J[: problem.n_g, problem.m :],
+        J[problem.n_g :, : problem.m],
+        J[problem.n_g :, problem.m :],
     )
-    return P_s - P_z @ np.linalg.solve(G_z, G_s) if tr.n_g else P_s
+    return P_s - P_z @ np.linalg.solve(G_z, G_s) if problem.n_g else P_s
 
 
 # -- declared unilateral constraints becoming active ----------------------------------------------
@@ -524,12 +529,12 @@ def n_extra(boundary: tuple | None) -> int:
     return 1 if boundary is not None and boundary[0] == "graze_min" else 0
 
 
-def phase_start(tr: Transcription, w: Any, p: Any, k: int) -> Any:
+def phase_start(problem: ShootingProblem, w: Any, p: Any, k: int) -> Any:
     """The state where chain phase ``k`` begins, from the shooting unknowns (symbolic or
     numeric): the lifted section point for ``k = 0``, else the phase's first node."""
     if k == 0:
-        return tr.section.lift(w[: tr.m], p)
-    _, _, off, (n, _) = next(item for item in tr.layout if item[0] == "nodes" and item[1] == k)
+        return problem.section.lift(w[: problem.m], p)
+    _, _, off, (n, _) = next(item for item in problem.layout if item[0] == "nodes" and item[1] == k)
     return w[off : off + n]
 
 
@@ -556,8 +561,8 @@ def _constraint_condition(model_cls, disc, steps, boundary) -> ca.Function:
     what, k, j = boundary
     if what not in CONSTRAINT_QUANTITIES:
         raise GaitoptInputError(f"`boundary` must be one of {CONSTRAINT_QUANTITIES}, got {what!r}")
-    tr = transcription(model_cls, disc, steps)
-    phase = tr.phases[tr.chain[k]]
+    problem = shooting_problem(model_cls, disc, steps)
+    phase = problem.phases[problem.chain[k]]
     if not 0 <= j < len(phase.constraints):
         raise GaitoptInputError(
             f"phase {phase.name!r} declares {len(phase.constraints)} constraint(s); no index {j}"
@@ -565,9 +570,9 @@ def _constraint_condition(model_cls, disc, steps, boundary) -> ca.Function:
     constraint = phase.constraints[j]
     rate = rate_along(phase.flow, constraint.function)
     n_p, n_u = len(model_cls.parameter_specs()), len(model_cls.inputs)
-    w = ca.MX.sym("w", tr.size + n_extra(boundary))
+    w = ca.MX.sym("w", problem.size + n_extra(boundary))
     u, p = ca.MX.sym("u", n_u), ca.MX.sym("p", n_p)
-    x0 = phase_start(tr, w, p, k)
+    x0 = phase_start(problem, w, p, k)
     if what == "lift_off":
         if not constraint.at_start:
             raise GaitoptInputError(
@@ -575,7 +580,7 @@ def _constraint_condition(model_cls, disc, steps, boundary) -> ca.Function:
             )
         g = rate(x0, u, p)
     else:
-        t_star = w[tr.size]
-        x_star = segment_function(phase.flow, disc.segments * disc.steps)(x0, u, p, t_star)
+        t_star = w[problem.size]
+        x_star = segment_function(phase.flow, disc.segments * disc.rk_steps)(x0, u, p, t_star)
         g = ca.vertcat(constraint.function(x_star, u, p), rate(x_star, u, p))
     return ca.Function(f"constraint_{what}", [w, u, p], [g], ["w", "u", "p"], ["g"])

@@ -38,14 +38,14 @@ class Evaluation:
 class Assembly:
     """The assembled shooting system of a problem (see the module docstring)."""
 
-    def __init__(self, problem, steps: int | None = None):
+    def __init__(self, problem, rk_steps: int | None = None):
         kern = model_kernels(problem.model_cls)
         if kern is None:
             raise NotImplementedError("no kernels for this model class")
         self.compiled = kern.compiled
         self.lift = kern.lift
         S = problem.disc.segments
-        N = problem.disc.steps if steps is None else steps
+        N = problem.disc.rk_steps if rk_steps is None else rk_steps
         self.S, self.chain, self.m = S, problem.chain, problem.m
         self.size, self.section_index = problem.size, problem.section_index
         phase = {i: phase_function(problem.model_cls, i, S, N) for i in set(self.chain)}

@@ -1,0 +1,260 @@
+"""One direction of pseudo-arclength continuation from a certified gait (Keller's method;
+Allgower & Georg, "Numerical Continuation Methods", §2.1): predictor along the tangent,
+Newton corrector with the arclength condition, adaptive step, every point certified."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..hybrid import HybridModel
+from ..result import LimitCycle
+from ..shooting import MultipleShooting, ShootingProblem, certify, shooting_problem
+from ..stability import section_jacobians
+from .branch import SpecialPoint
+from .special import SpecialPoints, test_functions
+
+__all__ = ["Follower"]
+
+_MAX_MESH_REFINEMENTS = 4
+
+
+class Follower(SpecialPoints):
+    """One direction of pseudo-arclength continuation from a certified gait."""
+
+    def __init__(self, first, param, direction, limits, options, verify, tol):
+        self.first, self.param, self.direction = first, param, direction
+        self.limits, self.options, self.verify, self.tol = limits, options, verify, tol
+        model = first.model
+        self.model0 = model
+        self.index = [s.name for s in model.parameter_specs()].index(param)
+        self.scale = max(abs(float(getattr(model, param))), 1e-3)
+        # A model whose nominal per-step input is a parameter (the SLIP's touchdown angle) moves
+        # its input with that parameter, unless the start used other inputs on purpose.
+        nominal = model.nominal_input()
+        self.u0 = np.asarray(first.inputs, dtype=float)
+        self.du = np.zeros_like(self.u0)
+        if self.u0.size and np.allclose(self.u0, nominal, rtol=0, atol=1e-15):
+            h = 1e-6 * self.scale
+            lam0 = float(getattr(model, param))
+            try:
+                up = model.replace(**{param: lam0 + h}).nominal_input()
+                self.du = (up - nominal) / h  # nominal inputs are affine in the parameter
+            except ParameterError:
+                down = model.replace(**{param: lam0 - h}).nominal_input()
+                self.du = (nominal - down) / h
+        self.lam0 = float(getattr(model, param))
+        disc = first.discretisation or MultipleShooting(*type(model).mesh)
+        self.problem: ShootingProblem = shooting_problem(type(model), disc, first.steps)
+        self.refinements = 0
+        self._last_evaluation = None
+        self.cycles: list[LimitCycle] = [first]
+        self.special_points: list[SpecialPoint] = []
+        self.stop = ""
+
+    # -- the equations ---------------------------------------------------------------------
+    def lam(self, y: np.ndarray) -> float:
+        return float(y[-1] * self.scale)
+
+    def _p(self, y: np.ndarray) -> np.ndarray:
+        p = self.model0.p.copy()
+        p[self.index] = self.lam(y)
+        return p
+
+    def _u(self, y: np.ndarray) -> np.ndarray:
+        return self.u0 + self.du * (self.lam(y) - self.lam0)
+
+    def jacobian(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``F(y)`` and ``[F_w, F_ℓ]`` (``F_ℓ`` through the parameter and the input it sets)."""
+        ev = self._evaluate(y)
+        F_lam = ev.F_p[:, self.index] + ev.F_u @ self.du
+        J = np.hstack([ev.F_w, F_lam[:, None] * self.scale])
+        return ev.F, J
+
+    def _evaluate(self, y: np.ndarray):
+        """The shooting equations and all their Jacobians at ``y`` in one compiled call
+        (:meth:`gaitopt.shooting.ShootingProblem.evaluate`), kept for the next use at the same
+        point (the tangent, the error estimate, the multipliers and the certificate)."""
+        key = (id(self.problem), y.tobytes())
+        if self._last_evaluation is None or self._last_evaluation[0] != key:
+            self._last_evaluation = (key, self.problem.evaluate(y[:-1], self._u(y), self._p(y)))
+        return self._last_evaluation[1]
+
+    def weights(self, y: np.ndarray) -> np.ndarray:
+        n = y.size - 1
+        return np.concatenate([np.full(n, 1.0 / n), [1.0]])
+
+    def tangent(self, y: np.ndarray, previous: np.ndarray) -> np.ndarray:
+        """Null vector of ``[F_w, F_ℓ]``, unit in the weighted norm, oriented like ``previous``."""
+        _, J = self.jacobian(y)
+        W = self.weights(y)
+        K = np.vstack([J, previous * W])
+        rhs = np.zeros(K.shape[0])
+        rhs[-1] = 1.0
+        t = np.linalg.solve(K, rhs)
+        t /= math.sqrt(float(t @ (W * t)))
+        return t if float(t @ (W * previous)) > 0 else -t
+
+    def correct(self, y_pred: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, bool, int]:
+        """Newton on ``F(y) = 0, ⟨t, y − y_pred⟩_W = 0``; converged when ``|F| ≤ tol`` after a
+        step below 1e-12 (relative)."""
+        y = y_pred.copy()
+        W = self.weights(y)
+        F, J = self.jacobian(y)
+        for k in range(1, self.options.max_corrector + 1):
+            if not np.all(np.isfinite(F)):
+                return y, False, k
+            G = np.concatenate([F, [float(t @ (W * (y - y_pred)))]])
+            dy = np.linalg.solve(np.vstack([J, t * W]), -G)
+            y = y + dy
+            F, J = self.jacobian(y)
+            small = np.max(np.abs(dy)) < 1e-9 * (1 + np.max(np.abs(y)))
+            if small and np.max(np.abs(F)) <= self.tol:
+                return y, True, k
+        return y, False, self.options.max_corrector
+
+    # -- a point on the branch ---------------------------------------------------------------
+    def model_at(self, y: np.ndarray) -> HybridModel | None:
+        try:
+            return self.model0.replace(**{self.param: self.lam(y)})
+        except ParameterError:
+            return None
+
+    def multipliers_at(self, y: np.ndarray) -> np.ndarray:
+        """Multipliers only (no checks): for locating special points."""
+        ev = self._evaluate(y)
+        J_w = self.problem.map_jacobian(ev.F_w)
+        A, _ = section_jacobians(J_w, ev.F_u, self.problem.m, self.problem.n_g)
+        return np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
+
+    def certified(self, y: np.ndarray) -> tuple[LimitCycle | None, np.ndarray]:
+        """The gait at ``y`` (None where the parameter leaves its range or the refined mesh
+        cannot be corrected) and the point it was certified at (moved by a mesh change).
+
+        The mesh follows the discretisation error: refined (steps doubled) while the estimate
+        exceeds ``tol``, coarsened again where half the steps would still meet it (the error
+        scales as h⁸)."""
+        model = self.model_at(y)
+        if model is None:
+            return None, y
+        error = self._discretisation_error(y)
+        while error > self.tol and self.refinements < _MAX_MESH_REFINEMENTS:
+            self.problem = shooting_problem(
+                type(model), self.problem.disc.refined(), self.problem.cycles
+            )
+            self.refinements += 1
+            y, ok, _ = self.correct(y, self._unit_lambda())
+            if not ok:
+                return None, y
+            error = self._discretisation_error(y)
+        if self.problem.disc.rk_steps > type(model).mesh[1] and error < self.tol / 1000:
+            coarse = shooting_problem(
+                type(model), self.problem.disc.coarsened(), self.problem.cycles
+            )
+            previous = self.problem
+            self.problem = coarse
+            y_coarse, ok, _ = self.correct(y, self._unit_lambda())
+            coarse_error = self._discretisation_error(y_coarse) if ok else math.inf
+            if coarse_error <= self.tol:
+                y, error = y_coarse, coarse_error
+                self.refinements = max(self.refinements - 1, 0)
+            else:
+                self.problem = previous
+        cycle = certify(
+            model,
+            self.problem,
+            y[:-1],
+            self._u(y),
+            verify=self.verify,
+            tol=self.tol,
+            discretisation_error=error,
+            evaluation=self._evaluate(y),
+        )
+        return cycle, y
+
+    def _unit_lambda(self) -> np.ndarray:
+        t = np.zeros(self.problem.size + 1)
+        t[-1] = 1.0  # correct at fixed parameter
+        return t
+
+    def _discretisation_error(self, y: np.ndarray) -> float:
+        F_fine = self.problem.fine_residual(y[:-1], self._u(y), self._p(y))
+        F_w = self._evaluate(y).F_w
+        return float(np.max(np.abs(np.linalg.solve(F_w, F_fine))))
+
+    # -- the loop ----------------------------------------------------------------------------
+    def run(self) -> Follower:
+        opts = self.options
+        first = self.first
+        y = np.concatenate(
+            [
+                self.problem.unknowns_from_cycle(first),
+                [float(getattr(first.model, self.param)) / self.scale],
+            ]
+        )
+        start = np.zeros_like(y)
+        start[-1] = self.direction
+        t = self.tangent(y, start)
+        h = opts.step
+        tests = test_functions(first.multipliers)
+        slow = 0
+        while len(self.cycles) < opts.max_points:
+            y_new, ok, iterations = self.correct(y + h * t, t)
+            lam_new = self.lam(y_new)
+            limit = self._crossed_limit(lam_new) if ok else None
+            if limit is not None:
+                y_new, ok = self._land_on(limit, y, t)
+                lam_new = self.lam(y_new)
+                if ok:
+                    cycle, y_new = self.certified(y_new)
+                    if cycle is not None and cycle.success:
+                        self._special_points_between(y, t, y_new, tests, cycle, h_total=None)
+                        self.cycles.append(cycle)
+                        self.stop = f"reached {self.param} = {lam_new:.10g}"
+                        return self
+                    ok = False
+            if not ok:
+                h /= 2
+                if h < opts.min_step:
+                    self._boundary(y, t, 2 * h, "the corrector cannot continue the branch")
+                    return self
+                continue
+            cycle, y_new = self.certified(y_new)
+            if cycle is None or not cycle.success:
+                if cycle is None and self.model_at(y_new) is None:
+                    self.stop = f"{self.param} left its valid range near {lam_new:.10g}"
+                    return self
+                self._boundary(y, t, h, cycle.message if cycle is not None else "")
+                return self
+            new_tests = test_functions(cycle.multipliers)
+            self._special_points_between(y, t, y_new, tests, cycle, h_total=h, new_tests=new_tests)
+            self.cycles.append(cycle)
+            t = self.tangent(y_new, t)
+            slow = slow + 1 if abs(lam_new - self.lam(y)) < 1e-12 * self.scale else 0
+            if slow >= 5:
+                self._boundary(
+                    y_new,
+                    t,
+                    opts.min_step,
+                    "the parameter stops advancing (a phase duration grows without bound)",
+                    locate=False,
+                )
+                return self
+            y, tests = y_new, new_tests
+            h = min(opts.max_step, h * 1.5) if iterations <= 3 else h / 2 if iterations >= 6 else h
+        self.stop = f"stopped after {opts.max_points} points"
+        return self
+
+    def _crossed_limit(self, lam: float) -> float | None:
+        lo, hi = self.limits
+        return hi if lam > hi else lo if lam < lo else None
+
+    def _land_on(self, limit: float, y: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, bool]:
+        """Correct at exactly the limit (natural parameter step from ``y``)."""
+        dl = limit / self.scale - y[-1]
+        y_pred = y + t * (dl / t[-1]) if abs(t[-1]) > 1e-12 else y.copy()
+        y_pred[-1] = limit / self.scale
+        y_new, ok, _ = self.correct(y_pred, self._unit_lambda())
+        return y_new, ok

@@ -1,0 +1,103 @@
+"""Branch switching at a period doubling: onto the period-2k orbit born there.
+
+At a PD of a period-k orbit the period-k solution repeated twice solves the period-2k shooting
+equations, whose Jacobian is singular there: its null vector is the direction of the new branch
+(the section perturbation alternates, ``+v`` then ``−v``, with ``A v = −v``; Kuznetsov,
+"Elements of Applied Bifurcation Theory", §10.2; Allgower & Georg §8.1 for switching along the
+null vector).  The period-2k orbit just past the PD is found by Newton from the repeated orbit
+plus ``ε`` times that null vector, with ``ε ∝ sqrt(|λ − λ_PD|)`` (the amplitude of a
+period-doubled orbit grows as the square root of the distance from the PD): no simulation, and
+every candidate is kept only if it was born at the PD (next to the parent orbit, with the
+multiplier +1 into which the parent's −1 squares), so that an unrelated period-2k orbit nearby is
+never mistaken for the new branch.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import GaitoptInputError, ParameterError
+from ..result import LimitCycle
+from ..shooting import shooting_problem, solve_gait
+from .branch import Branch, SpecialPoint
+
+__all__ = ["doubled_unknowns", "switch_at_period_doubling"]
+
+#: Offsets of the parameter from the PD tried, relative to ``max(|λ_PD|, 1e-3)``: not too close,
+#: where the singular Jacobian amplifies the discretisation error (and the mesh needed).
+OFFSETS = (1e-3, 1e-2, 1e-4)
+#: Amplitudes ``a`` of ``ε = a · sqrt(offset)`` (section coordinates normalised to 1): small
+#: first, large for strongly curved branches.
+AMPLITUDES = (0.1, 0.03, 0.3, 1.0)
+#: Born at the PD: the new orbit's section point within this distance of the parent's (relative
+#: to ``1 + max |s|``) and a multiplier within this of +1.
+BORN_NEAR, BORN_MULTIPLIER = 0.05, 0.25
+
+
+def doubled_unknowns(cycle: LimitCycle) -> tuple[object, np.ndarray, np.ndarray]:
+    """The period-2k problem, the parent orbit repeated as its unknowns, and the null vector of
+    its Jacobian at the PD (the smallest right singular vector, scaled to 1 in the section)."""
+    problem = cycle.problem
+    doubled = shooting_problem(problem.model_cls, problem.disc, 2 * problem.cycles)
+    s, nodes, durations = problem.unpack(cycle.solution, cycle.model.p)
+    w2 = doubled.pack(s, nodes + nodes, list(durations) * 2)
+    F_w = doubled.evaluate(w2, cycle.inputs, cycle.model.p).F_w
+    null = np.linalg.svd(F_w)[2][-1]
+    return doubled, w2, null / np.max(np.abs(null[: doubled.m]))
+
+
+def born_at(doubled: LimitCycle, parent: LimitCycle) -> bool:
+    """Whether a period-2k orbit found next to a PD was born there (see the module docstring)."""
+    scale = 1 + np.max(np.abs(parent.section_point))
+    near = np.max(np.abs(doubled.section_point - parent.section_point)) < BORN_NEAR * scale
+    return bool(near and np.min(np.abs(doubled.multipliers - 1)) < BORN_MULTIPLIER)
+
+
+def switch_at_period_doubling(
+    sp: SpecialPoint, param, direction, to, bounds, options, verify, tol, max_period, *, follow
+) -> Branch | None:
+    """Find the period-2k orbit born at a PD and follow it away from the PD (and down its own
+    doublings) with ``follow`` (the continuation's branch follower).  It is sought first on the
+    continuation's side of the PD (a supercritical doubling), then on the other (subcritical)."""
+    cycle = sp.cycle
+    if cycle is None or not cycle.success or cycle.problem is None:
+        return None
+    problem, w2, null = doubled_unknowns(cycle)
+    nominal = np.allclose(cycle.inputs, cycle.model.nominal_input(), rtol=0, atol=1e-15)
+    lam_pd = sp.param
+    for side in (direction, -direction):
+        for offset in OFFSETS:
+            lam = lam_pd + side * offset * max(abs(lam_pd), 1e-3)
+            if to is not None and side == direction and (lam - to) * direction > 0:
+                continue
+            if not bounds[0] <= lam <= bounds[1]:
+                continue
+            try:
+                model = cycle.model.replace(**{param: lam})
+            except ParameterError:
+                continue
+            # A model whose nominal input is set by the parameter (SLIP) keeps it nominal.
+            u = model.nominal_input() if nominal else np.asarray(cycle.inputs, dtype=float)
+            for amplitude in AMPLITUDES:
+                w0 = w2 + amplitude * math.sqrt(offset) * null
+                try:
+                    doubled = solve_gait(model, problem, w0, u, verify=verify, tol=tol)
+                except GaitoptInputError:
+                    continue
+                if doubled.success and born_at(doubled, cycle):
+                    return follow(
+                        doubled,
+                        param,
+                        side,
+                        to if side == direction else None,
+                        bounds,
+                        options,
+                        False,
+                        True,
+                        max_period,
+                        verify,
+                        tol,
+                    )
+    return None

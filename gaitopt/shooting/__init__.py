@@ -1,0 +1,31 @@
+"""Limit cycles of hybrid models by multiple shooting, solved with CasADi.
+
+The problem and the methods are separate modules:
+
+* :mod:`~gaitopt.shooting.problem` — :class:`MultipleShooting` (the discretisation) and
+  :class:`ShootingProblem` (unknowns, residual, Jacobians, bounds, objective slot, and the map
+  back to phases and orbits);
+* :mod:`~gaitopt.shooting.newton` — Newton and IPOPT on a problem;
+* :mod:`~gaitopt.shooting.certify` — the checks that make a solution a gait, and its multipliers;
+* :mod:`~gaitopt.shooting.verify` — the independent simulation;
+* :mod:`~gaitopt.shooting.find` — :func:`find_limit_cycle`, which puts them together.
+"""
+
+from .certify import certify, check_constraints
+from .find import find_limit_cycle, solve_gait
+from .newton import METHODS, Solution
+from .problem import MultipleShooting, ShootingProblem, shooting_problem
+from .verify import verify_by_simulation
+
+__all__ = [
+    "METHODS",
+    "MultipleShooting",
+    "ShootingProblem",
+    "Solution",
+    "certify",
+    "check_constraints",
+    "find_limit_cycle",
+    "shooting_problem",
+    "solve_gait",
+    "verify_by_simulation",
+]

@@ -1,0 +1,126 @@
+"""The methods that solve a :class:`~gaitopt.shooting.problem.ShootingProblem`: Newton on the
+square shooting system (the compiled kernels' Jacobian, or CasADi's ``rootfinder`` where a model
+has none) and IPOPT (``nlpsol``) with positive durations and an optional objective."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..errors import GaitoptInputError
+from .problem import ShootingProblem
+from .symbolic import NEWTON_OPTIONS
+
+__all__ = ["METHODS", "Solution", "newton", "solve"]
+
+#: The methods :meth:`ShootingProblem.solve` offers.
+METHODS = ("newton", "ipopt")
+
+
+@dataclass(frozen=True)
+class Solution:
+    """What a method returns: the last point ``w`` and inputs ``u``, whether a stopping test
+    passed, the iterations (Jacobians evaluated) and the evaluation at ``w`` (None where the
+    method does not have it: IPOPT, CasADi's rootfinder)."""
+
+    w: np.ndarray
+    u: np.ndarray
+    converged: bool
+    iterations: int
+    evaluation: Any = None
+
+
+def solve(problem: ShootingProblem, w0, u, p, *, method="newton", objective=None,
+          free_inputs=False) -> Solution:  # fmt: skip
+    """Newton (plain, then with line search), or IPOPT with the problem's bounds and an
+    optional objective (see :meth:`ShootingProblem.ipopt_solver`)."""
+    if method not in METHODS:
+        raise GaitoptInputError(f"`method` must be one of {', '.join(METHODS)}, got {method!r}")
+    u = np.asarray(u, dtype=float).ravel()
+    if method == "newton":
+        if objective is not None or free_inputs:
+            raise GaitoptInputError(
+                "`objective`/`free_inputs` need method='ipopt': Newton solves the square system"
+            )
+        if problem.assembly() is not None:
+            w, converged, iterations, ev = newton(problem, w0, u, p)
+            if not converged:
+                w, converged, more, ev = newton(problem, w0, u, p, line_search=True)
+                iterations += more
+            return Solution(w, u, converged, iterations, ev)
+        w, converged, iterations = _newton(problem.newton, w0, u, p)
+        if not converged:
+            w, converged, more = _newton(problem.newton_line_search, w0, u, p)
+            iterations += more
+        return Solution(w, u, converged, iterations)
+    lbw, ubw = problem.bounds()
+    solver = problem.ipopt_solver(objective, free_inputs)
+    if free_inputs:
+        box = problem.model_cls.input_bounds
+        names = problem.model_cls.inputs
+        lbu = np.array([box.get(k, (-np.inf, np.inf))[0] for k in names])
+        ubu = np.array([box.get(k, (-np.inf, np.inf))[1] for k in names])
+        x0 = np.concatenate([np.asarray(w0, dtype=float).ravel(), u])
+        sol = solver(x0=x0, p=p, lbg=0, ubg=0, lbx=np.concatenate([lbw, lbu]),
+                     ubx=np.concatenate([ubw, ubu]))  # fmt: skip
+    else:
+        sol = solver(x0=w0, p=np.concatenate([u, p]), lbg=0, ubg=0, lbx=lbw, ubx=ubw)
+    x = np.asarray(sol["x"], dtype=float).ravel()
+    stats = solver.stats()
+    w, u = (x[: problem.size], x[problem.size :]) if free_inputs else (x, u)
+    return Solution(w, u, bool(stats["success"]), int(stats["iter_count"]))
+
+
+#: Newton's stopping tests (as CasADi's ``rootfinder`` "newton" options before): the largest
+#: residual, the largest step.
+_ABSTOL, _ABSTOL_STEP = NEWTON_OPTIONS["abstol"], NEWTON_OPTIONS["abstolStep"]
+
+
+def newton(problem: ShootingProblem, w0, u, p, *, line_search: bool = False):
+    """Newton on the compiled shooting system: each iteration one compiled call for ``F`` and
+    ``∂F/∂w``, a dense solve, and (with ``line_search``) halving the step until ``‖F‖₂``
+    decreases.  Stops where ``max |F| ≤ 1e-12`` or ``max |step| ≤ 1e-15``; 30 iterations
+    (100 with line search).
+
+    Returns
+    -------
+    (w, converged, iterations, evaluation) : the last point, whether a stopping test passed,
+    the number of Jacobians evaluated and the evaluation at ``w`` (reused by the caller).
+    """
+    asm = problem.assembly()
+    max_iter = 100 if line_search else NEWTON_OPTIONS["max_iter"]
+    w = np.array(w0, dtype=float).ravel()
+    ev = None
+    for iteration in range(1, max_iter + 1):
+        ev = ev if ev is not None else asm(w, u, p)
+        F = ev.F
+        if not (np.all(np.isfinite(F)) and np.all(np.isfinite(ev.F_w))):
+            return w, False, iteration, ev
+        if float(np.max(np.abs(F))) <= _ABSTOL:
+            return w, True, iteration, ev
+        try:
+            step = np.linalg.solve(ev.F_w, F)
+        except np.linalg.LinAlgError:  # exactly singular (a family of orbits): least squares
+            step = np.linalg.lstsq(ev.F_w, F, rcond=None)[0]
+        if float(np.max(np.abs(step))) <= _ABSTOL_STEP:
+            return w, True, iteration, ev
+        if not line_search:
+            w, ev = w - step, None
+            continue
+        norm, alpha = float(F @ F), 1.0
+        while True:
+            trial = asm(w - alpha * step, u, p)
+            if (np.all(np.isfinite(trial.F)) and float(trial.F @ trial.F) < norm) or alpha < 1e-4:
+                break
+            alpha /= 2
+        w, ev = w - alpha * step, trial
+    return w, False, max_iter, ev
+
+
+def _newton(solver: ca.Function, w0, u, p) -> tuple[np.ndarray, bool, int]:
+    w = np.asarray(solver(w0, u, p), dtype=float).ravel()
+    stats = solver.stats()
+    return w, bool(stats["success"]) and bool(np.all(np.isfinite(w))), int(stats["iter_count"])
