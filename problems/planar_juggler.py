@@ -63,7 +63,9 @@ def main(argv: list[str] | None = None) -> int:
     cycle = gaitopt.find_limit_cycle(juggler)
     closed = np.sort_complex(juggler.multipliers_closed_form())
     found = np.sort_complex(cycle.multipliers)
-    fixed_error = max(abs(cycle.fixed_point[k] - v) for k, v in juggler.fixed_point().items())
+    fixed_error = max(
+        abs(cycle.fixed_point[k] - v) for k, v in juggler.closed_form_fixed_point().items()
+    )
     multiplier_error = float(np.max(np.abs(found - closed)))
 
     # 2. Stability against the horizontal gains (shooting) vs the Jury region (closed form).
@@ -75,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
     for j, kv in enumerate(kv_grid):
         for i, kx in enumerate(kx_grid):
             model = juggler.replace(kappa_x=float(kx), kappa_xdot=float(kv))
-            c = gaitopt.find_limit_cycle(model, model.fixed_point())
+            c = gaitopt.find_limit_cycle(model, model.closed_form_fixed_point())
             ok = c.success and c.verified
             r_closed = radius(model.multipliers_closed_form())
             r = radius(c.multipliers) if ok else math.nan
@@ -97,7 +99,7 @@ def main(argv: list[str] | None = None) -> int:
     k1_rows = []
     for k1 in k1_grid:
         model = juggler.replace(kappa1=float(k1))
-        c = gaitopt.find_limit_cycle(model, model.fixed_point())
+        c = gaitopt.find_limit_cycle(model, model.closed_form_fixed_point())
         energy_mult = c.multipliers[
             np.argmin(np.abs(c.multipliers - model.multipliers_closed_form()[0]))
         ]

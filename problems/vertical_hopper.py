@@ -192,7 +192,7 @@ def main(argv: list[str] | None = None) -> int:
         "params": hopper.params,
         "damping_studied": DAMPING,
         "fixed_point": cycle.fixed_point["y"],
-        "fixed_point_closed_form": hopper.fixed_point(),
+        "fixed_point_closed_form": hopper.closed_form_fixed_point(),
         "multiplier": cycle.multipliers[0].real,
         "multiplier_closed_form": hopper.multiplier(),
         "fixed_point_thrust_closed_form": {"c": c_star, "delta": delta_star, "work": work},
@@ -209,7 +209,8 @@ def main(argv: list[str] | None = None) -> int:
     }
     write_json(summary, out / "summary.json")
     print(
-        f"fixed point {cycle.fixed_point['y']:.12f} m (closed form {hopper.fixed_point():g}), "
+        f"fixed point {cycle.fixed_point['y']:.12f} m "
+        f"(closed form {hopper.closed_form_fixed_point():g}), "
         f"multiplier {cycle.multipliers[0].real:.12f} (closed form {hopper.multiplier():g})"
     )
     print(f"map vs closed form: max error {map_error:.2g} m; multipliers: {multiplier_error:.2g}")

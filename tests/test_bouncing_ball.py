@@ -11,7 +11,6 @@ import pytest
 import gaitopt
 from gaitopt.cli import main
 from gaitopt.models.bouncing_ball import BouncingBall
-from gaitopt.returnmap import return_map
 
 # Shooting residual and discretisation-error estimate are ≤ 1e-10, so 1e-9 for closed forms.
 TOL = 1e-9
@@ -51,20 +50,6 @@ def test_multipliers_match_the_closed_form(ball, orbits):
         assert len(got) == 2
         assert np.prod(got).real == pytest.approx(ball.restitution**2, abs=TOL)
         np.testing.assert_allclose(np.sort_complex(got), np.sort_complex(expected), atol=TOL)
-
-
-def test_multipliers_match_finite_differences_of_the_simulated_map(ball, orbits):
-    # AD through the shooting equations vs central differences (h = 1e-6) of the SciPy map in
-    # (phase, y_dot); error budget h² P''' + rtol/h ~ 1e-5; tolerance 1e-5.
-    cycle = orbits["stable"]
-    s0, h = cycle.section_point, 1e-6
-    J = np.zeros((2, 2))
-    for j in range(2):
-        d = np.zeros(2)
-        d[j] = h
-        plus, minus = return_map(ball, s0 + d), return_map(ball, s0 - d)
-        J[:, j] = (plus - minus) / (2 * h)
-    np.testing.assert_allclose(J, cycle.jacobian, atol=1e-5)
 
 
 def test_impacts_reverse_the_relative_velocity_and_flights_conserve_energy(ball):

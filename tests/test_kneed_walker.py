@@ -24,7 +24,6 @@ from gaitopt.animation import walker_frames  # noqa: E402
 from gaitopt.errors import ParameterError  # noqa: E402
 from gaitopt.models.kneed_walker import BODY_NAMES  # noqa: E402
 from gaitopt.plotting import plot_phase_portrait  # noqa: E402
-from gaitopt.returnmap import return_map  # noqa: E402
 
 CURVED = 0.2  # m: a curved-foot walker well inside the range with a gait at the default slope
 
@@ -193,22 +192,6 @@ def test_simulation_from_the_fixed_point_repeats_the_orbit(gait):
     np.testing.assert_allclose(durations, gait.durations, atol=1e-9)
 
 
-def test_multipliers_match_finite_differences_of_the_simulated_map(point):
-    # Two independent methods (as tests/test_stability.py): implicit-function-theorem AD through
-    # the shooting equations vs central differences (h = 1e-5) of the event-located SciPy map
-    # (rtol 1e-11).  Error budget h² P''' + 1e-11/h ~ 1e-6; tolerance 2e-5 on the entries.
-    model, s = point.model, point.section_point
-    h = 1e-5
-    J = np.zeros((3, 3))
-    for j in range(3):
-        e = np.zeros(3)
-        e[j] = h
-        J[:, j] = (return_map(model, s + e) - return_map(model, s - e)) / (2 * h)
-    np.testing.assert_allclose(point.jacobian, J, atol=2e-5)
-    fd = np.sort(np.abs(np.linalg.eigvals(J)))
-    assert fd == pytest.approx(np.sort(np.abs(point.multipliers)), abs=5e-5)
-
-
 # -- invariants ---------------------------------------------------------------------------------
 
 
@@ -225,6 +208,13 @@ def test_energy_is_conserved_in_each_phase(gait):
         assert np.ptp(values) < 1e-9 * (1 + np.max(np.abs(values)))
 
 
+def _states_around(gait, transition: str) -> tuple[np.ndarray, np.ndarray]:
+    """The states just before and just after ``transition`` in one simulated step of ``gait``."""
+    sim = gaitopt.simulate(gait.model, gait.x, steps=1)
+    (event,) = [e for e in sim.events if e.transition == transition]
+    return event.state_before, event.state_after
+
+
 def test_knee_strike_conserves_angular_momentum_and_locks_the_knee(gait):
     # Knee strike: the locking impulse is internal to the swing leg and the ground impulse acts
     # at the stance contact, so the whole walker's angular momentum about the stance contact and
@@ -233,9 +223,7 @@ def test_knee_strike_conserves_angular_momentum_and_locks_the_knee(gait):
     # relative.  Geometry: the knee is straight at the strike (q2 = q3 to 1e-12) and was
     # extending (q̇3 < q̇2), flexed throughout the three-link phase.
     model, p = gait.model, gait.model.p
-    sim = gaitopt.simulate(model, gait.x, steps=1)
-    (event,) = [e for e in sim.events if e.transition == "knee strike"]
-    before, after = event.state_before, event.state_after
+    before, after = _states_around(gait, "knee strike")
     three, two = model.phases
     assert before[1] == pytest.approx(before[2], abs=1e-12)
     assert before[5] < before[4]
@@ -261,9 +249,7 @@ def test_heel_strike_conserves_angular_momentum(gait):
     # hip is conserved.  After the reset the legs have swapped roles: stance ↔ swing masses.
     # Tolerance 1e-12 relative.
     model, p = gait.model, gait.model.p
-    sim = gaitopt.simulate(model, gait.x, steps=1)
-    (event,) = [e for e in sim.events if e.transition == "heel strike"]
-    before, after = event.state_before, event.state_after
+    before, after = _states_around(gait, "heel strike")
     three, two = model.phases
     strike = _point(two, before, p, "swing_centre") - model.foot_radius * np.array(
         [math.sin(model.slope), math.cos(model.slope)]

@@ -153,7 +153,10 @@ def test_resets_land_on_the_section_and_the_safe_side_of_guards(name, cycles):
 def test_multipliers_agree_with_finite_differences_of_the_simulated_map(name, cycles):
     # Two independent methods: AD through the shooting equations (implicit function theorem)
     # vs central differences of the event-located SciPy map (rtol 1e-11, h = 1e-5 relative).
-    # Error budget: h² ~ 1e-10 plus 1e-11 / h ~ 1e-6; tolerance 5e-5 on the Jacobian's entries.
+    # Error budget: h² P''' ~ 1e-10 plus rounding 1e-11 / h ~ 1e-6, relative to the map's scale
+    # 1 + max |J|; tolerance 2e-6 (1 + max |J|) on the Jacobian's entries and on the moduli of
+    # its eigenvalues (the multipliers).  The largest error seen is 7.9e-7 (1 + max |J|), the
+    # simplest walker's.  One test for every model: the model test files do not repeat it.
     cycle = _gait(cycles, name)
     model, s = cycle.model, cycle.section_point
     J = np.zeros((s.size, s.size))
@@ -163,7 +166,10 @@ def test_multipliers_agree_with_finite_differences_of_the_simulated_map(name, cy
         forward = return_map(model, s + e, steps=cycle.steps, inputs=cycle.inputs)
         backward = return_map(model, s - e, steps=cycle.steps, inputs=cycle.inputs)
         J[:, j] = (forward - backward) / (2 * e[j])
-    np.testing.assert_allclose(cycle.jacobian, J, atol=5e-5 * (1 + np.max(np.abs(J))))
+    tol = 2e-6 * (1 + np.max(np.abs(J)))
+    np.testing.assert_allclose(cycle.jacobian, J, atol=tol)
+    fd_moduli = np.sort(np.abs(np.linalg.eigvals(J)))
+    assert fd_moduli == pytest.approx(np.sort(np.abs(cycle.multipliers)), abs=tol)
 
 
 # -- bad input -----------------------------------------------------------------------------------

@@ -38,7 +38,7 @@ def test_fixed_point_is_the_vertical_bounce(juggler, cycle):
     # Source: module docstring: the line x = x̄ is invariant; fixed point (x̄, 0, E_d = ½ ḃ_d²),
     # period 2 ḃ_d/g (the line juggler's); tolerance 1e-9.
     assert cycle.section_coordinates == COORDS
-    for name, value in juggler.fixed_point().items():
+    for name, value in juggler.closed_form_fixed_point().items():
         assert cycle.fixed_point[name] == pytest.approx(value, abs=TOL)
     assert cycle.fixed_point["y"] == pytest.approx(0.0, abs=TOL)
     assert cycle.fixed_point["y_dot"] == pytest.approx(3.0, abs=TOL)  # thrown back at ḃ_d
@@ -148,7 +148,7 @@ def test_stability_region_matches_the_jury_conditions(juggler, gains, stable):
     # Source: module docstring (Jury conditions on the horizontal matrix; λ_E of the line
     # juggler); multipliers to 1e-9.
     model = juggler.replace(**gains)
-    cycle = gaitopt.find_limit_cycle(model, model.fixed_point())
+    cycle = gaitopt.find_limit_cycle(model, model.closed_form_fixed_point())
     assert cycle.success and cycle.verified, cycle.message
     expected = np.sort_complex(model.multipliers_closed_form())
     assert np.allclose(np.sort_complex(cycle.multipliers), expected, atol=TOL)
@@ -159,7 +159,7 @@ def test_deadbeat_gains_zero_every_multiplier(juggler):
     # Source: module docstring: κ1 = 1/((1 + e) ḃ_d²), κ_ẋ = 1/a, κ_x = 1/(aT); tolerance:
     # a nilpotent 2×2 block's eigenvalues are ~ sqrt(1e-16) → 1e-7.
     model = juggler.replace(**juggler.deadbeat_gains())
-    cycle = gaitopt.find_limit_cycle(model, model.fixed_point())
+    cycle = gaitopt.find_limit_cycle(model, model.closed_form_fixed_point())
     assert cycle.success and cycle.verified, cycle.message
     assert np.abs(cycle.multipliers).max() < 1e-7
 

@@ -115,22 +115,6 @@ def test_angular_momentum_about_the_foot_changes_only_by_gravity(hopper):
     assert float(h.phases[0].flow(_states(1, rng, stance=False)[0], [], h.p)[5]) == 0.0
 
 
-def _return(hopper, s, **kw):
-    sim = gaitopt.simulate(hopper, hopper.lift(s), steps=1, **kw)
-    assert sim.success, sim.message
-    return hopper.section_coordinates_of(sim.section_states[-1])
-
-
-def test_ad_jacobian_matches_finite_differences_of_the_simulated_map(hopper, gait):
-    # AD through the shooting equations vs central differences (h = 1e-6) of the SciPy map
-    # (rtol 1e-11, events located by brentq): error budget h² P''' + rtol/h ~ 1e-5; tolerance 1e-5.
-    s0, h = gait.section_point, 1e-6
-    fd = np.column_stack(
-        [(_return(hopper, s0 + h * e) - _return(hopper, s0 - h * e)) / (2 * h) for e in np.eye(4)]
-    )
-    np.testing.assert_allclose(gait.jacobian, fd, atol=1e-5)
-
-
 def test_speed_tracking_converges_at_the_rate_of_the_multipliers(hopper, gait):
     # A change of desired speed 1.0 → 1.1 m/s (simulate's per-step `terrain` schedule) from the
     # old gait: the apex states approach the new gait with e[n] ≈ Jⁿ e[0] (J its AD Jacobian);

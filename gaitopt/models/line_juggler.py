@@ -39,6 +39,7 @@ Fixed point ``ḃ* = −ḃ_d``; slope ``P'(ḃ*) = 1 − (1 + e) κ1 ḃ_d²``:
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -185,9 +186,19 @@ class LineJuggler(HybridModel):
         gain = self.restitution + (1 + self.restitution) * self.kappa(0.0, b_dot)
         return gain * b_dot if gain > 0 and b_dot < 0 else math.nan
 
-    def fixed_point(self) -> float:
+    def closed_form_fixed_point(self) -> float:
         """``ḃ* = −ḃ_d`` (m/s)."""
         return -self.desired_speed
+
+    def fixed_point(self) -> float:
+        """Deprecated name of :meth:`closed_form_fixed_point` (``fixed_point`` is the found
+        gait's, :attr:`gaitopt.LimitCycle.fixed_point`)."""
+        warnings.warn(
+            "LineJuggler.fixed_point() is now closed_form_fixed_point()",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.closed_form_fixed_point()
 
     def multiplier(self) -> float:
         """``P'(ḃ*) = 1 − (1 + e) κ1 ḃ_d²``."""

@@ -70,6 +70,7 @@ whose matrix has trace ``2 − a κ_ẋ − a T κ_x`` and determinant ``1 − a
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -307,9 +308,19 @@ class PlanarJuggler(HybridModel):
         theta_dot = -k * (x * y_dot - y * x_dot) / (x**2 + y**2) + self.kappa_x * x_dot
         return theta, theta_dot
 
-    def fixed_point(self) -> dict[str, float]:
+    def closed_form_fixed_point(self) -> dict[str, float]:
         """``(x̄, 0, E_d)``: the vertical bounce on the line ``x = x̄``."""
         return {"x": self.desired_position, "x_dot_pre": 0.0, "energy_pre": self.desired_energy}
+
+    def fixed_point(self) -> dict[str, float]:
+        """Deprecated name of :meth:`closed_form_fixed_point` (``fixed_point`` is the found
+        gait's, :attr:`gaitopt.LimitCycle.fixed_point`)."""
+        warnings.warn(
+            "PlanarJuggler.fixed_point() is now closed_form_fixed_point()",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.closed_form_fixed_point()
 
     def horizontal_matrix(self) -> np.ndarray:
         """Linearised horizontal map in ``(ξ, u) = (x − x̄, ẋ⁻)`` (module docstring)."""

@@ -68,6 +68,7 @@ a terminal transition) and thrusts that let the body reach ``l0 + δ`` again (el
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -354,9 +355,19 @@ class VerticalHopper(HybridModel):
             return math.nan  # the body never gets back to l0 + δ
         return energy / mg
 
-    def fixed_point(self) -> float:
+    def closed_form_fixed_point(self) -> float:
         """``y* = h_d`` (m; eq. 3, damping 0)."""
         return self.desired_height
+
+    def fixed_point(self) -> float:
+        """Deprecated name of :meth:`closed_form_fixed_point` (``fixed_point`` is the found
+        gait's, :attr:`gaitopt.LimitCycle.fixed_point`)."""
+        warnings.warn(
+            "VerticalHopper.fixed_point() is now closed_form_fixed_point()",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.closed_form_fixed_point()
 
     def multiplier(self) -> float:
         """``P'(h_d) = 1 − K`` (eq. 3, damping 0)."""
