@@ -9,7 +9,8 @@ from scipy.integrate import solve_ivp
 
 import gaitopt
 from gaitopt.result import OrbitArc
-from gaitopt.shooting import _check_dense, _verify, transcription
+from gaitopt.shooting import shooting_problem, verify_by_simulation
+from gaitopt.shooting.certify import _check_dense
 
 
 def test_multipliers_exclude_the_trivial_ones(cycles):
@@ -48,10 +49,14 @@ def test_multipliers_predict_convergence_in_simulation(cycles):
 def test_verification_rejects_a_point_that_is_not_on_the_orbit(cycles):
     cycle = cycles["compass_gait"]
     model = cycle.model
-    ok, error, _ = _verify(model, cycle.x, cycle.durations, 1, model.nominal_input(), 1e-7)
+    ok, error, _ = verify_by_simulation(
+        model, cycle.x, cycle.durations, 1, model.nominal_input(), 1e-7
+    )
     assert ok and error < 1e-9
     wrong = cycle.x + np.array([1e-4, -1e-4, 0.0, 0.0])
-    ok, error, message = _verify(model, wrong, cycle.durations, 1, model.nominal_input(), 1e-7)
+    ok, error, message = verify_by_simulation(
+        model, wrong, cycle.durations, 1, model.nominal_input(), 1e-7
+    )
     assert not ok and "returns" in message
 
 
@@ -61,9 +66,9 @@ def test_dense_check_rejects_an_orbit_through_the_ground(cycles):
     # the no-false-gait rule must reject it, while the real orbit passes.
     cycle = cycles["compass_gait"]
     model = cycle.model
-    tr = transcription(type(model), cycle.discretisation, 1)
+    shooting = shooting_problem(type(model), cycle.discretisation, 1)
     u, p = model.nominal_input(), model.p
-    assert _check_dense(model, tr, cycle.orbit, u, p) is None
+    assert _check_dense(model, shooting, cycle.orbit, u, p) is None
     arc = cycle.orbit[0]
     t = np.linspace(0, 1.6 * cycle.period, arc.x.shape[1])
     flow = model.phases[0].flow
@@ -76,5 +81,5 @@ def test_dense_check_rejects_an_orbit_through_the_ground(cycles):
         atol=1e-12,
     )
     through_ground = [OrbitArc(arc.phase, arc.name, arc.states, t, ode.y, arc.transition)]
-    problem = _check_dense(model, tr, through_ground, u, p)
+    problem = _check_dense(model, shooting, through_ground, u, p)
     assert problem is not None and "crosses 'heel strike'" in problem
