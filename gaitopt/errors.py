@@ -75,6 +75,13 @@ class GuessError(GaitoptInputError):
     """An initial guess from which the model never reaches its next transition."""
 
 
+class ModelDefinitionError(TypeError):
+    """A model class whose hybrid structure is inconsistent (found once, when its structure is
+    first built): a cycle transition that does not enter the next phase, a reset or section lift
+    of the wrong dimension, a section lift that moves its own coordinates.  A defect of the
+    model's code, not of a user's input."""
+
+
 class FrozenModelError(dataclasses.FrozenInstanceError):
     """Assigning to a model's attribute: models are immutable (their functions are shared); the
     message says how to make a model with another parameter value."""

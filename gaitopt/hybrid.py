@@ -318,6 +318,7 @@ class HybridModel:
     #: none; every input acts in the flow.
     impulsive_inputs: ClassVar[tuple[str, ...]] = ()
     _cache: ClassVar[dict[type, _Structure]] = {}
+    _specs: ClassVar[dict[type, tuple[ParameterSpec, ...]]] = {}
 
     def __post_init__(self) -> None:
         if type(self).__setattr__ is not _frozen_setattr:  # see _frozen_setattr
@@ -407,14 +408,19 @@ class HybridModel:
     # -- derived -----------------------------------------------------------------------------
     @classmethod
     def parameter_specs(cls) -> tuple[ParameterSpec, ...]:
-        """Specifications of the parameters, in the order of the vector ``p``."""
-        return parameter_specs(cls)
+        """Specifications of the parameters, in the order of the vector ``p`` (read once per
+        class: a model's fields do not change)."""
+        specs = HybridModel._specs.get(cls)
+        if specs is None:
+            specs = HybridModel._specs[cls] = parameter_specs(cls)
+        return specs
 
     @classmethod
     def _structure(cls) -> _Structure:
         if cls not in HybridModel._cache:
             sym = Symbols(cls.parameter_specs(), cls.inputs)
             phases, section = cls.build(sym)
+            _validate_structure(cls, tuple(phases), section)
             HybridModel._cache[cls] = _Structure(tuple(phases), section)
         return HybridModel._cache[cls]
 
@@ -530,3 +536,61 @@ def _frozen_setattr(self: HybridModel, name: str, value: Any) -> None:
         f"cannot assign to {cls.__name__}.{name}: models are immutable; change a parameter with "
         f"model.replace(NAME=VALUE)"
     )
+
+
+def _validate_structure(cls: type, phases: tuple[Phase, ...], section: Section) -> None:
+    """Check a model class's hybrid structure once, when it is built: the cycle's transitions
+    enter the next phase in order (the shooting follows the cycle order, the simulation follows
+    ``target``: they must agree), resets and guards have the right dimensions, and the section
+    lift has phase 0's dimension and leaves its own coordinates unchanged (checked at the
+    default parameters and a few section points)."""
+    from .errors import ModelDefinitionError
+
+    def fail(what: str) -> None:
+        raise ModelDefinitionError(f"model class {cls.__name__}: {what}")
+
+    if not phases:
+        fail("`build` returned no phases")
+    for i, phase in enumerate(phases):
+        if not phase.transitions:
+            fail(f"phase {phase.name!r} has no transition")
+        for j, transition in enumerate(phase.transitions):
+            where = f"transition {transition.name!r} of phase {phase.name!r}"
+            if transition.direction not in (-1, 1):
+                fail(f"{where}: direction must be +1 or -1, got {transition.direction!r}")
+            if transition.guard.numel_out(0) != 1:
+                fail(f"{where}: the guard must be scalar")
+            if transition.reset is None:  # ends the motion (a fall; the ballistic swing's end)
+                continue
+            if j == 0 and transition.target != (i + 1) % len(phases):
+                fail(
+                    f"{where} closes the phase in the cycle, so its target must be the next phase "
+                    f"({(i + 1) % len(phases)}), got {transition.target!r}"
+                )
+            if transition.target is None or not 0 <= transition.target < len(phases):
+                fail(f"{where}: target {transition.target!r} is not a phase index")
+            n_target = phases[transition.target].n
+            if transition.reset.numel_out(0) != n_target:
+                fail(
+                    f"{where}: the reset gives {transition.reset.numel_out(0)} states, the "
+                    f"target phase {phases[transition.target].name!r} has {n_target}"
+                )
+    first = phases[0]
+    missing = [c for c in section.coordinates if c not in first.states]
+    if missing:
+        fail(f"section coordinate(s) {missing} are not states of phase {first.name!r}")
+    if section.lift.numel_in(0) != len(section.coordinates) or section.lift.numel_out(0) != first.n:
+        fail(
+            f"the section lift must map {len(section.coordinates)} coordinate(s) to the "
+            f"{first.n} states of phase {first.name!r}"
+        )
+    p = np.array([spec.default for spec in cls.parameter_specs()], dtype=float)
+    index = [first.states.index(c) for c in section.coordinates]
+    for scale in (0.01, 0.1):
+        s = scale * np.arange(1, len(index) + 1, dtype=float)
+        x = np.asarray(section.lift(s, p), dtype=float).ravel()
+        if np.all(np.isfinite(x)) and np.max(np.abs(x[index] - s), initial=0.0) > 1e-12:
+            fail(
+                f"the section lift moves its own coordinates (lift(s)[{section.coordinates}] = "
+                f"{x[index]} at s = {s}): it must return them unchanged"
+            )
