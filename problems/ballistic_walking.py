@@ -13,7 +13,15 @@ Winter's segment data; see the model's docstring for its simplifications against
 * a solved swing is *ballistic* when its knee never hyperextends, its foot clears the ground and
   its stance leg pushes (the paper's conditions); the study also reports the sub-range where the
   knee's peak flexion stays below 70° (about the largest knee flexion of normal human swing), a
-  physiological bound that is ours, not the paper's.
+  physiological bound that is ours, not the paper's;
+* the lower end of each range is set against a closed form: the shortest swing of the hip as a
+  point mass on a massless inverted-pendulum leg (the swing leg's mass neglected), where the
+  leg force m (g cos θ − l θ̇²) reaches zero at toe-off (its minimum over the step): θ̇₀² =
+  (g/l) cos α and T_min = ∫_{−α}^{α} dθ / sqrt(θ̇₀² + 2 (g/l)(cos α − cos θ)), α = asin(d/2l).
+
+The paper's own numbers (its figure of the shortest and longest swing time against step length,
+and the measured swing times it compares with) were not found in the sources available to this
+project, so no digit-by-digit comparison is made.
 
     python problems/ballistic_walking.py --out results [--fast]
 
@@ -31,12 +39,44 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from scipy.integrate import quad  # noqa: E402
 
 import gaitopt  # noqa: E402
 from gaitopt.files import write_csv, write_json  # noqa: E402
 from gaitopt.plotting import save_figure  # noqa: E402
 
 PEAK_KNEE = math.radians(70)  # our physiological bound (normal swing peaks near 60–70°)
+
+
+def point_mass_shortest_swing(step_length: float, leg_length: float, gravity: float) -> float:
+    """The shortest swing time (s) of a point-mass hip on a massless straight stance leg from
+    θ = −α to α, α = asin(d / 2l), with the leg still pushing: its force m (g cos θ − l θ̇²), by
+    energy conservation θ̇² = θ̇₀² + 2 (g/l)(cos α − cos θ), is least at θ = ±α, so the leg pulls
+    first at toe-off once θ̇₀² > (g/l) cos α; at that bound the time is the quadrature below."""
+    alpha = math.asin(step_length / (2 * leg_length))
+    w = gravity / leg_length
+    rate0_sq = w * math.cos(alpha)
+    time, _ = quad(
+        lambda th: 1 / math.sqrt(rate0_sq + 2 * w * (math.cos(alpha) - math.cos(th))), -alpha,
+        alpha, epsabs=1e-13, epsrel=1e-12,
+    )  # fmt: skip
+    return time
+
+
+def shortest_ballistic_swing(model, swings: list) -> float | None:
+    """The swing time (s) where the lower end's condition — the stance leg's least vertical
+    ground force over the swing — crosses zero, located by Brent's method to 1e-4 s between the
+    last grid time where the leg pulls and the first ballistic one (None without that bracket)."""
+    from scipy.optimize import brentq
+
+    first = next((k for k, sw in enumerate(swings) if sw.ballistic), None)
+    if first is None or first == 0 or "pulls" not in swings[first - 1].reason:
+        return None
+    guess = swings[first].rates
+    return brentq(
+        lambda t: model.swing(t, guess).min_vertical_force, swings[first - 1].time,
+        swings[first].time, xtol=1e-4,
+    )  # fmt: skip
 
 
 def sweep(model, times: np.ndarray) -> list:
@@ -92,6 +132,10 @@ def main(argv: list[str] | None = None) -> int:
             "ballistic_and_knee_below_70deg_s": ranges(times, physio),
             "failures": {k: [min(v), max(v)] for k, v in reasons.items()},
             "natural_swing_time_s": model.natural_swing_time(),
+            "shortest_ballistic_swing_s": shortest_ballistic_swing(model, swings),
+            "point_mass_shortest_swing_s": point_mass_shortest_swing(
+                d, model.leg_length, model.gravity
+            ),
         }
         for s in swings:
             rows.append(
@@ -116,6 +160,10 @@ def main(argv: list[str] | None = None) -> int:
         "force > 0 (the stance leg pushes), hip moving forward",
         "swing_time_grid_s": [float(times[0]), float(times[-1]), float(times[1] - times[0])],
         "by_step_length_m": table,
+        "closed_form": "point_mass_shortest_swing_s: the hip a point mass on a massless "
+        "inverted-pendulum leg (swing leg's mass neglected), the leg force zero at toe-off",
+        "published_numbers": "not compared: Mochon & McMahon's figure of the swing-time range "
+        "against step length was not available",
     }
     write_json(summary, folder / "summary.json")
     _figure(base, steps, times, swings_shown, table, folder / "ballistic_walking.png")
@@ -123,7 +171,9 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"step {d} m: ballistic swing times {entry['ballistic_ranges_s']} s; with peak knee "
             f"≤ 70°: {entry['ballistic_and_knee_below_70deg_s']} s; failures "
-            f"{entry['failures']}"
+            f"{entry['failures']}; shortest ballistic swing "
+            f"{entry['shortest_ballistic_swing_s']:.4f} s (point-mass hip, massless legs: "
+            f"{entry['point_mass_shortest_swing_s']:.4f} s)"
         )
     print(f"wrote {folder}")
     return 0
@@ -139,6 +189,15 @@ def _figure(base, steps, times, swings, table, path: Path) -> None:
             left.plot([d, d], [lo, hi], color="C2", lw=3, solid_capstyle="butt")
         fails = [s.time for s in swings[d] if not s.ballistic]
         left.plot([d] * len(fails), fails, "x", color="C3", ms=4)
+    grid = np.linspace(min(steps) - 0.05, max(steps) + 0.05, 50)
+    left.plot(grid, [point_mass_shortest_swing(x, base.leg_length, base.gravity) for x in grid],
+              "-", color="C1", lw=1.2,
+              label="point-mass hip on a massless leg: shortest swing (closed form)")  # fmt: skip
+    located = [(d, table[f"{d:g}"]["shortest_ballistic_swing_s"]) for d in steps]
+    located = [(d, t) for d, t in located if t is not None]
+    if located:
+        left.plot(*zip(*located, strict=True), "_", color="k", ms=18, mew=2,
+                  label="shortest ballistic swing (located, 1e-4 s)")  # fmt: skip
     left.plot([], [], color="C0", lw=8, label="ballistic swing exists")
     left.plot([], [], color="C2", lw=3, label="… with peak knee flexion ≤ 70°")
     left.plot([], [], "x", color="C3", label="no ballistic swing")
@@ -147,6 +206,7 @@ def _figure(base, steps, times, swings, table, path: Path) -> None:
     left.set_xlabel("step length d (m)")
     left.set_ylabel("swing time T (s)")
     left.set_title("swing times with a ballistic swing (Mochon & McMahon's question)", fontsize=9)
+    left.set_ylim(0.15, 1.3)  # room above the bars for the legend
     left.legend(fontsize=7.5, loc="upper left")
     left.grid(alpha=0.3)
 

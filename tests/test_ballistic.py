@@ -61,3 +61,13 @@ def test_toe_off_configuration_puts_the_toe_on_the_ground_with_the_knee_flexed(m
 def test_no_passive_gait_is_searched_for(model):
     assert model.passive_gait is False
     assert "boundary-value" in model.existence_note()
+
+
+def test_the_shortest_ballistic_swing_is_where_the_readme_says(model):
+    # problems/ballistic_walking.py locates the range's lower end at step 0.7 m (the stance
+    # leg's least vertical ground force crossing zero) by Brent's method to 1e-4 s: 0.2548 s
+    # (README; 5 % below the closed form 0.2681 s of a point-mass hip on massless legs).  A
+    # bracket ten times wider than that tolerance must straddle it.
+    below, above = model.swing(0.2538), model.swing(0.2558)
+    assert below.success and not below.ballistic and "pulls" in below.reason
+    assert above.success and above.ballistic, above.reason
