@@ -7,7 +7,28 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["LimitCycle", "OrbitArc"]
+__all__ = ["LimitCycle", "OrbitArc", "STATUS"]
+
+#: What a search ended in (``LimitCycle.status``), and what to try next (diffrax's ``RESULTS``,
+#: SciPy's ``OptimizeResult.status``): one code per way of failing; the message has the details.
+STATUS = {
+    "success": "a certified gait: solved, refined, checked on dense samples and verified",
+    "no_start": "the simulation from the guess never completes a step: try another guess "
+    "(`gaitopt simulate`), or the gait may not exist at these parameters",
+    "not_converged": "Newton/IPOPT did not converge: try a closer guess, `--starts 16`, the "
+    "ipopt method, or follow the gait from parameters where it exists (`gaitopt continue`)",
+    "singular": "the orbit is not isolated (a continuous family, or not transversal to a "
+    "guard): change the parameter that removes the restoring term",
+    "discretisation": "the orbit's discretisation error stays above `tol` at the finest mesh: "
+    "loosen `tol`",
+    "standing": "the solution is an equilibrium, not a gait: give the guess more speed, or "
+    "the gait may not exist (a passive walker needs a slope)",
+    "not_a_gait": "the orbit breaks a physical condition (a negative duration, a guard reached "
+    "the wrong way or crossed early, a foot through the ground, a leg that pulls) or repeats a "
+    "shorter one: the gait does not exist with this phase sequence here",
+    "not_verified": "the independent simulation does not confirm the orbit: tighten the mesh "
+    "or `tol`, or the gait is too sensitive to be trusted here",
+}
 
 
 @dataclass
@@ -96,6 +117,9 @@ class LimitCycle:
     gaits : list of dict
         With ``starts > 1``: every distinct gait the multi-start search found (``fixed_point``,
         ``period``, ``multipliers``, ``stable``, ``starts``: how many starts reached it).
+    status : str
+        One of :data:`STATUS`'s codes (``"success"``, ``"not_converged"``, ``"not_a_gait"``, …):
+        how the search ended, for programs; :data:`STATUS` says what to try next.
     problem : ShootingProblem or None
         The shooting problem solved (:class:`gaitopt.ShootingProblem`): model class,
         discretisation and cycles; None for a search that never reached the shooting equations.
@@ -132,6 +156,7 @@ class LimitCycle:
     solve_time: float = float("nan")
     route: str = ""
     gaits: list[dict[str, Any]] = field(default_factory=list)
+    status: str = ""
     problem: Any = field(default=None, repr=False, compare=False)
     solution: np.ndarray | None = field(default=None, repr=False, compare=False)
     evaluation: Any = field(default=None, repr=False, compare=False)
@@ -183,6 +208,7 @@ class LimitCycle:
             "discretisation_error": _num(self.discretisation_error),
             "iterations": int(self.iterations),
             "route": self.route,
+            "status": self.status or ("success" if self.success else "not_converged"),
             **({"gaits": self.gaits} if self.gaits else {}),
         }
         if timing:

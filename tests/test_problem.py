@@ -83,3 +83,17 @@ def test_newton_refuses_an_objective(gait):
         gait.problem.solve(
             gait.solution, gait.inputs, gait.model.p, objective=lambda sym: sym.period
         )
+
+
+def test_status_codes_say_how_a_search_ended(gait):
+    from gaitopt.result import STATUS
+
+    assert gait.status == "success" and gait.as_dict()["status"] == "success"
+    # The trailing foot that does not lift off (issue 9's case): solved, then refused by the
+    # dense constraint check.
+    walker = gaitopt.model("kneed_walker", slope=0.2)
+    refused = gaitopt.find_limit_cycle(
+        walker, {"q1": -0.19, "q1_dot": 1.11, "q2_dot": -2.41}, follow=False
+    )
+    assert not refused.success and refused.status == "not_a_gait"
+    assert set(STATUS) >= {gait.status, refused.status}

@@ -91,10 +91,13 @@ def certify(
         evaluation=ev,
     )
 
-    def fail(message: str, **extra: Any) -> LimitCycle:
+    def fail(message: str, status: str, **extra: Any) -> LimitCycle:
         note_ = model.existence_note()
         message = f"{message} [{note_}]" if note_ else message
-        return LimitCycle(False, message, solve_time=time.perf_counter() - start, **common, **extra)
+        return LimitCycle(
+            False, message, solve_time=time.perf_counter() - start, status=status, **common,
+            **extra,
+        )  # fmt: skip
 
     # -- no false gaits ----------------------------------------------------------------------
     defect = _check_orbit(
@@ -108,7 +111,7 @@ def certify(
     if defect is None and steps > 1:
         defect = _check_minimal_period(model, problem, w, steps)
     if defect is not None:
-        return fail(defect, orbit=orbit)
+        return fail(defect, "not_a_gait", orbit=orbit)
 
     try:
         A, B = section_jacobians(J_w, J_u, problem.m, problem.n_g)
@@ -116,6 +119,7 @@ def certify(
         return fail(
             "no isolated gait: the shooting equations are singular at the solution (the orbit "
             "is not transversal to a guard, or not isolated)",
+            "singular",
             orbit=orbit,
         )
     multipliers = np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
@@ -136,6 +140,7 @@ def certify(
     return LimitCycle(
         success=success,
         message=message,
+        status="success" if success else "not_verified",
         multipliers=multipliers if success else np.zeros(0, complex),
         stable=is_stable(multipliers) if success else None,
         verified=verified,

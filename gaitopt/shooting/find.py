@@ -150,7 +150,7 @@ def find_limit_cycle(
     disc = discretisation or MultipleShooting(*type(model).mesh)
     problem = shooting_problem(type(model), disc, steps)
 
-    def fail(message: str, **extra: Any) -> LimitCycle:
+    def fail(message: str, status: str, **extra: Any) -> LimitCycle:
         note = model.existence_note()
         if note:
             message = f"{message} [{note}]"
@@ -163,6 +163,7 @@ def find_limit_cycle(
             section_coordinates=model.section.coordinates,
             inputs=u,
             solve_time=time.perf_counter() - start,
+            status=status,
             **extra,
         )
 
@@ -193,8 +194,9 @@ def find_limit_cycle(
                     f"try another guess (e.g. from `gaitopt simulate {model.name}`)"
                 )
             return fail(
-                f"no gait found: the simulation from {where} does not complete "
-                f"{steps} step(s) ({sim.message}); the gait may not exist at these parameters"
+                status="no_start",
+                message=f"no gait found: the simulation from {where} does not complete "
+                f"{steps} step(s) ({sim.message}); the gait may not exist at these parameters",
             )
         w0 = problem.unknowns_from_simulation(s0, sim)
 
@@ -243,7 +245,7 @@ def solve_gait(
     disc = problem.disc
     p = model.p
 
-    def fail(message: str, **extra: Any) -> LimitCycle:
+    def fail(message: str, status: str, **extra: Any) -> LimitCycle:
         note = model.existence_note()
         if note:
             message = f"{message} [{note}]"
@@ -256,6 +258,7 @@ def solve_gait(
             section_coordinates=model.section.coordinates,
             inputs=u,
             solve_time=time.perf_counter() - start,
+            status=status,
             **extra,
         )
 
@@ -303,7 +306,9 @@ def solve_gait(
     )
     if singular:
         return fail(
-            f"no isolated gait: the shooting equations are solved (residual {residual:.3g}, "
+            status="singular",
+            message=f"no isolated gait: the shooting equations are solved "
+            f"(residual {residual:.3g}, "
             f"tolerance {tol:g}) but their Jacobian is singular there, so the orbit is one of a "
             f"continuous family (a multiplier exactly 1: the motion does not depend on some "
             f"coordinate, or a parameter makes a restoring term vanish) and has no fixed point "
@@ -325,9 +330,10 @@ def solve_gait(
                 f"above the tolerance {tol:g}"
             )
         return fail(
-            f"no periodic orbit found near the guess: {how}; the gait may not exist at these "
-            f"parameters, or the guess is too far from it: try a closer guess"
-            + (" or the ipopt method" if method == "newton" else ""),
+            status="not_converged",
+            message=f"no periodic orbit found near the guess: {how}; "
+            f"the gait may not exist at these parameters, or the guess is too far from it: "
+            f"try a closer guess" + (" or the ipopt method" if method == "newton" else ""),
             residual=residual,
             iterations=iterations,
             durations=durations if np.isfinite(period) else np.zeros(0),
@@ -336,7 +342,9 @@ def solve_gait(
     if disc_error > tol:
         condition = float(np.linalg.cond(F_w))
         return fail(
-            f"no certified gait: the discretisation error estimate {disc_error:.2g} stays above "
+            status="discretisation",
+            message=f"no certified gait: the discretisation error estimate "
+            f"{disc_error:.2g} stays above "
             f"the tolerance {tol:g} after {refinements} mesh refinements "
             f"({problem.disc.rk_steps} RK steps per segment), so the orbit is known only to about "
             f"{disc_error:.1g}; the shooting Jacobian's condition number is {condition:.2g} "
@@ -352,8 +360,10 @@ def solve_gait(
     rate = np.asarray(model.phases[0].flow(x_star, u, p), dtype=float).ravel()
     if float(np.max(np.abs(rate))) <= 1e-8 * (1 + float(np.max(np.abs(x_star)))):
         return fail(
-            "no gait: the orbit found is standing still (an equilibrium: the state does not "
-            "change, zero step length), which solves the shooting equations with any phase "
+            status="standing",
+            message="no gait: the orbit found is standing still "
+            "(an equilibrium: the state does not change, zero step length), which solves the "
+            "shooting equations with any phase "
             "duration but is not a gait; the gait may not exist at these parameters (a passive "
             "walker needs a slope), or try a guess with more speed",
             residual=residual,
