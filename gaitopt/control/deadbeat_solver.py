@@ -199,8 +199,7 @@ class Deadbeat:
         shooting = self.shooting
         w = np.concatenate([s, v[: self.n_z]])
         outputs = self._checks(w, u, p)
-        ends, dg, adm, durations = (np.asarray(a, dtype=float).ravel() for a in outputs)
-        del ends
+        _, dg, adm, durations = (np.asarray(a, dtype=float).ravel() for a in outputs)
         model = self.model
         for k, i in enumerate(shooting.chain):
             phase = model.phases[i]
