@@ -2,7 +2,10 @@
 
 Kept outside the ``gaitopt`` package (it is not installed with it and never imported by it):
 ``python -m bench --out results/bench.json`` from the project's root.  Modules: :mod:`bench.run`
-(the driver, the table and the goals), :mod:`bench.baselines` (hand-written SciPy return maps),
+(the driver), :mod:`bench.cycles` (gaitopt and the baseline timed), :mod:`bench.drake` (Drake's
+runs), :mod:`bench.control` (the deadbeat decision), :mod:`bench.reference` (reference numbers and
+goals), :mod:`bench.table` (the printed report), :mod:`bench.common` (shared helpers),
+:mod:`bench.baselines` (hand-written SciPy return maps),
 :mod:`bench.branches` (continuation and sweeps), :mod:`bench.curves` (two-parameter curves),
 :mod:`bench.optimize` (optimal gaits).
 """

@@ -3,7 +3,9 @@ point (``NS``) or existence ``boundary`` of a gait followed through two paramete
 codimension-two points on the way.
 
 * :mod:`gaitopt.curves.system` — the extended system (orbit + defining condition) as one CasADi
-  function with its exact Jacobian; parameter paths;
+  function with its exact Jacobian; built from :mod:`gaitopt.curves.paths` (parameter paths),
+  :mod:`gaitopt.curves.matrices` (the singular matrices, bordering vectors) and
+  :mod:`gaitopt.curves.constraints` (the conditions of declared unilateral constraints);
 * :mod:`gaitopt.curves.follow` — pseudo-arclength continuation of the curve, every point
   certified; :func:`bifurcation_curve`;
 * :mod:`gaitopt.curves.codim2` — test functions of the codimension-two points;
