@@ -20,11 +20,13 @@ slope) or none at all (Van der Pol at μ = 5 from the μ = 1 start).  Two remedi
 
 from __future__ import annotations
 
+import time
 from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
+from .errors import GaitoptInputError
 from .hybrid import HybridModel
 from .result import LimitCycle
 
@@ -215,3 +217,70 @@ def multi_start(
         else:
             match["starts"] += 1
     return sorted(distinct, key=lambda d: -d["starts"])
+
+
+def find_the_gait_meant(model, guess, *, follow, starts, seed, scheduler, **options) -> LimitCycle:
+    """The homotopy from the defaults and the multi-start search around
+    :func:`~gaitopt.find_limit_cycle`'s direct solve (called by it; see the module docstring)."""
+    from .shooting import find_limit_cycle
+
+    if not isinstance(starts, int) or isinstance(starts, bool) or not 1 <= starts <= _MAX_STARTS:
+        raise GaitoptInputError(
+            f"`starts` must be an integer from 1 to {_MAX_STARTS}, got {starts!r}; e.g. starts=8"
+        )
+    if not isinstance(seed, int) or isinstance(seed, bool):
+        raise GaitoptInputError(f"`seed` must be an integer, got {seed!r}; e.g. seed=0")
+    start = time.perf_counter()
+    steps = options.pop("steps")
+    direct = lambda: find_limit_cycle(model, guess, steps=steps, follow=False, **options)  # noqa: E731
+    cycle = None
+    if guess is None and steps == 1 and follow is not False:
+        followed = follow_default_gait(model, **options)
+        if followed is not None and followed.success:
+            cycle = followed
+        elif followed is not None:  # lost on the way: try the default start directly
+            cycle = direct()
+            lost = followed.message
+            if cycle.success:
+                cycle = replace(
+                    cycle,
+                    message=f"{cycle.message}; found from the default start ({lost})",
+                    route=f"direct from the default start; {lost}",
+                )
+            else:
+                cycle = replace(
+                    cycle,
+                    message=(
+                        f"no gait found. Following the default gait from the default parameters "
+                        f"({path_description(changed_parameters(model))}): {lost}. From the "
+                        f"default start: {cycle.message}. Try `--starts 16` (a multi-start "
+                        f"search), a --guess near a gait you know, or `gaitopt continue` to see "
+                        f"where the branch ends"
+                    ),
+                    route="homotopy from the defaults, then direct from the default start",
+                )
+    if cycle is None:
+        cycle = direct()
+        if guess is None and not cycle.route:
+            cycle = replace(cycle, route="direct from the default start")
+    if starts > 1:
+        gaits = multi_start(
+            model, starts, seed=seed, steps=steps, scheduler=scheduler,
+            **{k: v for k, v in options.items() if k in ("inputs", "method", "tol")},
+        )  # fmt: skip
+        if not cycle.success and gaits:  # the multi-start found what the default route did not
+            best = gaits[0]
+            cycle = find_limit_cycle(
+                model,
+                {k: best["fixed_point"][k] for k in model.section.coordinates},
+                steps=steps,
+                follow=False,
+                **options,
+            )
+        count = f"{len(gaits)} distinct gait(s) from {starts} starts (seed {seed})"
+        cycle = replace(cycle, gaits=gaits, message=f"{cycle.message}; multi-start: {count}")
+    return replace(cycle, solve_time=time.perf_counter() - start)
+
+
+#: Most starts of one multi-start search (each a full solve: 1000 take minutes).
+_MAX_STARTS = 1000

@@ -18,7 +18,7 @@ from scipy.integrate import quad
 import gaitopt
 from gaitopt.cli import main as cli_main
 from gaitopt.returnmap import return_map
-from gaitopt.simulation import _accumulation
+from gaitopt.simulation.zeno import accumulation as _accumulation
 
 MAP_TOL = 1e-9  # simulated map (rtol 1e-11) vs closed form
 

@@ -1,0 +1,254 @@
+"""One phase of a simulation: the phase's functions at fixed inputs and parameters
+(:class:`PhaseFunctions`: the right-hand side, guards, admissibility, unilateral constraints as
+events) and the integration of one phase until an admissible directional crossing, located on
+the step's dense output (SciPy's ``solve_ivp`` event logic, step by step)."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from ..hybrid import Phase, rate_along
+
+__all__ = ["PhaseFunctions", "integrate_phase"]
+
+# A guard must have been below -_ARM (in units of the guard) before it can fire.
+_ARM = 1e-10
+
+
+class _Buffered:
+    """A CasADi function evaluated through preallocated buffers (``Function.buffer``): about
+    50× less call overhead than ``f(x, u, p)``, which dominates small right-hand sides."""
+
+    def __init__(self, f: ca.Function, u: np.ndarray, p: np.ndarray):
+        self._x = np.zeros(f.size1_in(0))
+        self._u = np.ascontiguousarray(u, dtype=float)
+        self._p = np.ascontiguousarray(p, dtype=float)
+        self._out = np.zeros(f.numel_out(0))
+        self._buffer, self._trigger = f.buffer()
+        for i, a in enumerate((self._x, self._u, self._p)):
+            self._buffer.set_arg(i, memoryview(a))
+        self._buffer.set_res(0, memoryview(self._out))
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        self._x[:] = x
+        self._trigger()
+        return self._out.copy()
+
+
+class PhaseFunctions:
+    """Numerical callables of one phase, for fixed ``u`` and ``p``.
+
+    Events are numbered: the phase's transitions first, then its unilateral constraints, each of
+    which is a terminal event where ``c`` falls through zero (a trip, a leg that pulls)."""
+
+    def __init__(self, phase: Phase, u: np.ndarray, p: np.ndarray, constraints: bool = True):
+        self.phase = phase
+        self.u, self.p = u, p
+        self.constraints = phase.constraints if constraints else ()
+        self._flow = _Buffered(phase.flow, u, p)
+        self._guards = [_Buffered(tr.guard, u, p) for tr in phase.transitions]
+        self._guards += [_Buffered(c.function, u, p) for c in self.constraints]
+        self._directions = [tr.direction for tr in phase.transitions]
+        self._directions += [-1] * len(self.constraints)
+        self._admissible = [
+            _Buffered(tr.admissible, u, p) if tr.admissible is not None else None
+            for tr in phase.transitions
+        ] + [None] * len(self.constraints)
+        self._jac = None
+        self._events = [tr.guard for tr in phase.transitions]
+        self._events += [c.function for c in self.constraints]
+
+    def step_function(self) -> ca.Function:
+        """One DOP853 step with this phase's event functions (:mod:`gaitopt.dop853`)."""
+        from ..dop853 import step_function
+
+        return step_function(self.phase.flow, self._events, _CHECKS_PER_STEP)
+
+    @property
+    def events(self) -> int:
+        """Number of events (transitions and constraints)."""
+        return len(self._guards)
+
+    _drive = None  # (feedforward, section time, step) for a time-varying input
+
+    def rhs(self, t: float, x: np.ndarray) -> np.ndarray:
+        if self._drive is not None:  # feedforward u(t − t_section, step) in the flow
+            feedforward, t_section, step = self._drive
+            self._flow._u[:] = feedforward(t - t_section, step)
+        return self._flow(x)
+
+    def jac(self, t: float, x: np.ndarray) -> np.ndarray:
+        if self._jac is None:
+            self._jac = self.phase.flow.factory("jac", ["x", "u", "p"], ["jac:flow:x"])
+        return np.asarray(self._jac(x, self.u, self.p))
+
+    def signed_guard(self, k: int, x: np.ndarray) -> float:
+        return self._directions[k] * float(self._guards[k](x)[0])
+
+    def admissible(self, k: int, x: np.ndarray) -> bool:
+        n_tr = len(self.phase.transitions)
+        if k >= n_tr and self.constraints[k - n_tr].at_end:
+            # A constraint that vanishes where the phase ends (a foot touching down) reaches 0
+            # with the cycle's guard: that is the touchdown, not a violation.
+            return abs(float(self._guards[0](x)[0])) > _CONSTRAINT_START
+        a = self._admissible[k]
+        return a is None or float(a(x)[0]) > 0
+
+    def violated_at_start(self, x: np.ndarray) -> tuple[int, str] | None:
+        """A constraint that fails where the phase begins: one that starts active (``at_start``)
+        and does not rise (a trailing foot that does not lift off), or one already negative."""
+        n_tr = len(self.phase.transitions)
+        for j, c in enumerate(self.constraints):
+            value = float(self._guards[n_tr + j](x)[0])
+            unit = f" {c.unit}" if c.unit else ""
+            if c.at_start:
+                rate = float(rate_along(self.phase.flow, c.function)(x, self.u, self.p))
+                if not rate > _CONSTRAINT_RATE:
+                    return (
+                        n_tr + j,
+                        f"'{c.name}' starts at 0 and does not rise (rate {rate:.3g}{unit}/s)",
+                    )
+            elif value < -_CONSTRAINT_START:
+                return n_tr + j, f"'{c.name}' fails at the start ({value:.3g}{unit})"
+        return None
+
+
+# A constraint that starts active must rise faster than this (its unit per second); one that does
+# not must not start below -_CONSTRAINT_START (its unit).  The shooting's certify uses the same.
+_CONSTRAINT_RATE = 1e-9
+_CONSTRAINT_START = 1e-9
+
+
+def _short_excursion(funcs: PhaseFunctions, x0: np.ndarray, armed: np.ndarray) -> float | None:
+    """A step bound that lets the guard checks see a short excursion at the phase start.
+
+    A phase that starts on a guard (a rimless wheel rocking onto a spoke at a few mm/s) may leave
+    it to the armed side and come back within a fraction of one adaptive step: the checks at
+    the step's interior points would miss it, and the wheel would sink through the ground.  For
+    each transition that starts unarmed and moves to its armed side (signed rate ``ġ < 0``) with
+    a curvature that brings it back (``g̈ > 0``), the excursion lasts about ``τ = 2|ġ|/g̈``
+    (second-order Taylor); the returned bound ``τ/4`` holds until every guard is armed.  None if
+    no such excursion."""
+    bound = np.inf
+    for k, tr in enumerate(funcs.phase.transitions):
+        if armed[k]:
+            continue
+        rate = rate_along(funcs.phase.flow, tr.guard)
+        g1 = tr.direction * float(rate(x0, funcs.u, funcs.p))
+        g2 = tr.direction * float(rate_along(funcs.phase.flow, rate)(x0, funcs.u, funcs.p))
+        if g1 < 0 < g2:
+            bound = min(bound, 0.5 * abs(g1) / g2)
+    return float(bound) if np.isfinite(bound) and bound > 0 else None
+
+
+def _rests_on_guard(funcs: PhaseFunctions, x0: np.ndarray) -> str | None:
+    """The transition whose guard the state rests on, pressing into it, or None.
+
+    A state exactly on a guard (signed value 0), with zero rate (``ġ = 0``) and an acceleration
+    toward the firing side (``g̈ > 0``), is held there by the contact the guard describes (the
+    rimless wheel at rest on two spokes): the limit of the accumulating impacts, reached."""
+    for k, tr in enumerate(funcs.phase.transitions):
+        if tr.terminal or abs(funcs.signed_guard(k, x0)) > _ARM:
+            continue
+        rate = rate_along(funcs.phase.flow, tr.guard)
+        g1 = tr.direction * float(rate(x0, funcs.u, funcs.p))
+        g2 = tr.direction * float(rate_along(funcs.phase.flow, rate)(x0, funcs.u, funcs.p))
+        if abs(g1) <= _ARM and g2 > 0:
+            return tr.name
+    return None
+
+
+# Interior points per integrator step where the guards are also checked (on the dense output):
+# a guard excursion shorter than a step (a wheel that rocks back onto a spoke within
+# milliseconds) is still seen.
+_CHECKS_PER_STEP = 4
+
+
+def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_time, method):
+    """Integrate one phase until an admissible directional crossing; locate it.
+
+    A guard fires where its signed value goes from negative to non-negative after having been
+    below ``-_ARM`` in this phase (strict crossings); signs are checked at the step ends and at
+    ``_CHECKS_PER_STEP - 1`` interior points of each step, roots located by ``brentq`` on the
+    step's dense output."""
+    from scipy.integrate import OdeSolution
+    from scipy.optimize import brentq
+
+    n_tr = funcs.events
+    if method == "DOP853" and funcs._drive is None:  # one CasADi call per step (same method)
+        from ..dop853 import CompiledDOP853
+
+        solver = CompiledDOP853(funcs.rhs, funcs.step_function(), funcs.u, funcs.p, t0, x0,
+                                t0 + max_time, rtol=rtol, atol=atol)  # fmt: skip
+    else:
+        kwargs = {"jac": funcs.jac} if method in ("Radau", "LSODA") else {}
+        solver = solver_cls(funcs.rhs, t0, x0, t0 + max_time, rtol=rtol, atol=atol, **kwargs)
+    directions = np.array(funcs._directions, dtype=float)[:, None]
+    values = np.array([funcs.signed_guard(k, x0) for k in range(n_tr)], dtype=float)
+    armed = values < -_ARM
+    short = _short_excursion(funcs, x0, armed)
+    if short is not None:
+        solver.max_step = short
+    ts = [t0]
+    interpolants = []
+    while True:
+        solver.step()
+        if solver.status == "failed":
+            return OdeSolution(ts + [ts[-1]], interpolants or [None]), None, None, "failed"
+        t_old, t_new = solver.t_old, solver.t
+        dense = solver.dense_output()
+        grid = np.linspace(t_old, t_new, _CHECKS_PER_STEP + 1)
+        compiled = getattr(solver, "event_values", None)
+        if compiled is not None:  # the event functions at the check points, from the step call
+            signed = directions * compiled
+        else:
+            states = [dense(tt) for tt in grid[1:-1]] + [solver.y]
+            signed = np.array([[funcs.signed_guard(k, x) for x in states] for k in range(n_tr)])
+        best = None
+        signed = np.reshape(signed, (n_tr, _CHECKS_PER_STEP))
+        before = np.concatenate([values[:, None], signed[:, :-1]], axis=1)
+        crossing = bool(np.any((before < 0) & (signed >= 0)))
+        if not crossing:  # no sign change in this step: only the arming and the last values
+            armed |= np.any(signed < -_ARM, axis=1)
+            values[:] = signed[:, -1]
+        for k in range(n_tr if crossing else 0):
+            previous, was_armed = values[k], armed[k]
+            for j in range(1, _CHECKS_PER_STEP + 1):
+                current = float(signed[k, j - 1])
+                if was_armed and previous < 0 <= current and compiled is not None:
+                    # confirm on the dense output itself (the bracket brentq is given)
+                    ends = [
+                        funcs.signed_guard(k, dense(grid[j - 1])),
+                        funcs.signed_guard(k, dense(grid[j]) if j < _CHECKS_PER_STEP else solver.y),
+                    ]
+                    previous, current = ends
+                if was_armed and previous < 0 <= current:
+                    t_hit = brentq(
+                        lambda tt, k=k, dense=dense: funcs.signed_guard(k, dense(tt)),
+                        grid[j - 1],
+                        grid[j],
+                        xtol=1e-15,
+                        rtol=4 * np.finfo(float).eps,
+                        maxiter=200,
+                    )
+                    x_hit = dense(t_hit)
+                    if funcs.admissible(k, x_hit):
+                        if best is None or t_hit < best[0]:
+                            best = (t_hit, k, x_hit)
+                        break
+                was_armed = was_armed or current < -_ARM
+                previous = current
+            armed[k] = was_armed
+            values[k] = previous
+        interpolants.append(dense)
+        if short is not None and (
+            np.all(armed[: len(funcs.phase.transitions)]) or t_new - t0 > 8 * short
+        ):
+            solver.max_step, short = np.inf, None  # the excursion is over: full steps
+        if best is not None:
+            ts.append(best[0])
+            return OdeSolution(ts, interpolants), best[1], best[2], None
+        ts.append(t_new)
+        if solver.status == "finished":
+            return OdeSolution(ts, interpolants), None, None, "timeout"
