@@ -6,16 +6,22 @@
 * :mod:`~gaitopt.optimize.solve` — IPOPT with exact derivatives, multi-start, mesh refinement;
 * :mod:`~gaitopt.optimize.verify` and :mod:`~gaitopt.optimize.floquet` — trust: dense checks,
   independent simulation, multipliers two ways;
-* :mod:`~gaitopt.optimize.result` — :class:`OptimalGait`.
+* :mod:`~gaitopt.optimize.result` — :class:`OptimalGait`;
+* :mod:`~gaitopt.optimize.stabilise` — a per-step input offset (LQR) that stabilises an
+  unstable optimum, checked in simulation;
+* :mod:`~gaitopt.optimize.library` — libraries of optima continued in a constraint (folds,
+  active-set changes, cold-start checks) and multi-starts on Dask.
 """
 
 from __future__ import annotations
 
 from .collocation import Arc, Collocation, RadauMesh
+from .library import GaitLibrary, gait_library
 from .problem import COSTS, GaitProblem
 from .profile import InputProfile
 from .result import Minimum, OptimalGait
 from .solve import optimize_gait, solve_problem
+from .stabilise import Stabilisation, stabilise
 
 __all__ = [
     "optimize_gait",
@@ -28,4 +34,8 @@ __all__ = [
     "OptimalGait",
     "Minimum",
     "COSTS",
+    "stabilise",
+    "Stabilisation",
+    "gait_library",
+    "GaitLibrary",
 ]

@@ -548,13 +548,14 @@ def gait_library(
             col, w = gait.transcription
             point.hessian = reduced_hessian(col, w, col.model.p)
         library.points.append(point)
+        event = None
         if last is not None:
             event = _compare(last, point, solve, locate, library.points[0].hessian_ratio)
             if event is not None:
                 library.events.append(event)
         if gait.success:
             last = point
-        elif last is not None and library.events and library.events[-1].kind in ("fold", "end"):
+        elif event is not None and event.kind in ("fold", "end"):
             break  # past a fold or the end of the branch: nothing to warm start from
     library.cold_checks = _cold_checks(library, cold_values, model, vary, fixed, cost, options,
                                        scheduler)  # fmt: skip
@@ -603,14 +604,18 @@ def _cold_values(grid: np.ndarray, cold: int | Sequence[float]) -> list[float]:
 def _compare(
     a: LibraryPoint, b: LibraryPoint, solve: Any, locate: float, reference: float
 ) -> LibraryEvent | None:
-    """The event between a successful point ``a`` and the next point ``b``, located."""
+    """The event between a successful point ``a`` and the next point ``b``, located.
+
+    A ``b`` that converged to an optimum which then failed a check (simulation, discretisation
+    target) still has an active set to compare; one with no optimum ends the library there."""
     width = locate * abs(b.value - a.value)
-    if b.gait.success:
+    if _optimum(b.gait):
         before, after = set(a.gait.active_constraints), set(b.gait.active_constraints)
         if before != after:
             return _bisect_active(a, b, before, solve, width)
         if (
-            np.isfinite(a.hessian[0])
+            b.gait.success
+            and np.isfinite(a.hessian[0])
             and np.isfinite(b.hessian[0])
             and np.sign(a.hessian[0]) != np.sign(b.hessian[0])
         ):
