@@ -10,7 +10,6 @@ from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 if TYPE_CHECKING:
     from .jansen import JansenLinkage
@@ -60,6 +59,8 @@ class Turn:
 
     def _extremum(self, values: np.ndarray, component: int, sign: float) -> tuple[float, float]:
         """Refined ``sign · max`` of a foot coordinate: Brent's method around the best sample."""
+        from scipy.optimize import minimize_scalar  # on first use (0.5 s)
+
         n = int(np.argmax(sign * values))
         step = self.thetas[1] - self.thetas[0]
         res = minimize_scalar(
@@ -84,6 +85,8 @@ class Turn:
     def ground_fraction(self, band: float = GROUND_BAND) -> float:
         """Share of a crank turn (uniform crank rate) with the foot within ``band`` (m) of its
         lowest point: the crossings of ``y = y_min + band`` refined by Brent's method."""
+        from scipy.optimize import brentq  # on first use (0.5 s)
+
         level = self.extremes["y_min"][0] + band
         y = self.foot[:, 1] - level
         inside = 0.0
@@ -140,6 +143,8 @@ class Turn:
         is found on a dense grid and refined with exact solves (Brent's method on the lower
         envelope of the feet around the best grid point).
         """
+        from scipy.optimize import minimize_scalar  # on first use (0.5 s)
+
         grid = np.linspace(0, 2 * math.pi, 8 * (len(self.thetas) - 1), endpoint=False)
         ride = self.ride_height(phases, grid)
         n = int(np.argmin(ride))
