@@ -20,7 +20,7 @@ import casadi as ca
 from .cache import cache_dir, load, source_key
 from .symbolic import kernel_functions
 
-__all__ = ["ModelKernels", "model_kernels", "phase_function", "cache_dir"]
+__all__ = ["ModelKernels", "model_kernels", "phase_function", "trajectory_function", "cache_dir"]
 
 
 class ModelKernels:
@@ -72,3 +72,24 @@ def phase_function(model_cls, phase: int, segments: int, steps: int) -> ca.Funct
     X = ca.MX.sym("X", n, segments)
     X_end, Ds = segment(X, u, p, hs)
     return ca.Function(f"phase_{phase}", [X, u, p, hs], [X_end, Ds, *end(X_end[:, -1], u, p)])
+
+
+@lru_cache(maxsize=256)
+def trajectory_function(model_cls, phase: int, segments: int, steps: int) -> ca.Function:
+    """``trajectory(X, u, p, hs) -> samples`` (n × segments·(steps + 1)): the states at every one
+    of ``steps`` RK steps of each segment (its start first), by the compiled ``fold``: the dense
+    samples of the certification and the plotted orbit, the same numbers as
+    :func:`gaitopt.integrators.segment_trajectory_function` (same RK step) without building its
+    graph (0.1 s) or interpreting it."""
+    kern = model_kernels(model_cls)
+    n, nu, np_ = kern.n[phase], kern.n_u, kern.n_p
+    fold = kern.fold[phase]
+    x0, u, p, hs = ca.MX.sym("x0", n), ca.MX.sym("u", nu), ca.MX.sym("p", np_), ca.MX.sym("hs")
+    D = ca.MX(ca.DM.zeros(n, n + nu + np_ + 1))  # derivatives not needed here
+    cols, x = [x0], x0
+    for _ in range(steps):
+        x, _ = fold(x, D, u, p, hs, steps)
+        cols.append(x)
+    segment = ca.Function("samples", [x0, u, p, hs], [ca.horzcat(*cols)]).map(segments)
+    X = ca.MX.sym("X", n, segments)
+    return ca.Function(f"trajectory_{phase}", [X, u, p, hs], [segment(X, u, p, hs)])

@@ -190,11 +190,17 @@ class ShootingProblem(SymbolicShooting):
 
     def sample_numeric(self, w, u, p) -> list[np.ndarray]:
         """Dense samples of every phase (n × S·(dense + 1)), without the whole graph."""
-        S = self.disc.segments
+        S, q = self.disc.segments, self.disc.dense
         starts = self.segment_starts(w, p)
         durations = [w[off] for kind, _, off, _ in self.layout if kind == "duration"]
+        if self.assembly() is not None:  # the compiled RK step (gaitopt.kernels)
+            from ..kernels import trajectory_function
+
+            sampler = {i: trajectory_function(self.model_cls, i, S, q) for i in set(self.chain)}
+        else:
+            sampler = self._samplers
         return [
-            np.asarray(self._samplers[i](starts[k], u, p, durations[k] / S), dtype=float)
+            np.asarray(sampler[i](starts[k], u, p, durations[k] / S), dtype=float)
             for k, i in enumerate(self.chain)
         ]
 
