@@ -92,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
     ax1.set_ylabel("least effort ∫τ² dt (N²·m²·s)")
     ax1.set_title(f"Compass gait, level ground, step period T = {PERIOD} s")
     ax1.legend()
-    ax2.plot(steps, [r[4] for r in rows], "o-")
+    ax2.plot(steps[ok], [r[4] for r in rows if r[3]], "o-")  # certified optima only
     ax2.axhline(1.0, color="k", lw=0.8)
     ax2.set_xlabel("step length L (m)")
     ax2.set_ylabel("largest Floquet multiplier |μ| (1)")
