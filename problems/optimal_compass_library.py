@@ -97,7 +97,11 @@ def main(argv: list[str] | None = None) -> int:
     ax2.set_xlabel("step length L (m)")
     ax2.set_ylabel("largest Floquet multiplier |μ| (1)")
     save_figure(fig, folder / "cost.png")
-    return 0 if library.success else 1
+    # The study holds if the library and the cold starts give the same answer everywhere: the
+    # same certified cost, or no certified gait from either (0.5 m: a grazing heel strike).
+    same = all(c.agree or (c.library_cost is None and c.cold_cost is None)
+               for c in library.cold_checks)  # fmt: skip
+    return 0 if same and len(library.cold_checks) == len(steps) else 1
 
 
 if __name__ == "__main__":
