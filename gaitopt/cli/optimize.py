@@ -388,6 +388,14 @@ def _print(report: dict[str, Any]) -> None:
     ]
     for i, m in enumerate(report.get("minima", [])):
         rows.append((f"minimum {i + 1}", f"cost {m['cost']:.10g}, starts {m['starts']}"))
+    st = report.get("stabilisation")
+    if st is not None:
+        rows.append(("stabilised", st["success"]))
+        rows.append(("  message", st["message"]))
+        if "gain" in st:
+            rows.append(("  gain K", f"{st['gain']} (δ = −K (s − s*))"))
+            rows.append(("  closed", st["closed_loop_multipliers"]))
+            rows.append(("  measured", st["measured_closed_loop_multipliers"]))
     _print_rows(rows)
 
 
