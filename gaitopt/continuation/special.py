@@ -11,7 +11,9 @@ import numpy as np
 from ..shooting import certify
 from .branch import SpecialPoint
 
-__all__ = ["LOCATE_TOL", "SpecialPoints", "bisect_boundary", "test_functions"]
+__all__ = [
+    "LOCATE_TOL", "SpecialPoints", "bisect_boundary", "regula_falsi", "test_functions",
+]  # fmt: skip
 
 #: Parameter accuracy of located special points (absolute).
 LOCATE_TOL = 1e-10
@@ -42,33 +44,21 @@ class SpecialPoints:
     def _locate(self, y, t, h_b, kind, psi_a, psi_b) -> SpecialPoint | None:
         """Illinois regula falsi on the arclength for the test function's zero, until the
         bracket is below 1e-10 in the parameter and 1e-9 in the arclength."""
-        lo, hi, f_lo, f_hi = 0.0, h_b, psi_a, psi_b
-        lam_lo, lam_hi = self.lam(y), None
-        side, y_mid = 0, y
-        for _ in range(60):
-            h = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
-            if not lo < h < hi:
-                h = 0.5 * (lo + hi)
+
+        def evaluate(h):
             y_mid, ok, _ = self.correct(y + h * t, t)
             if not ok:
                 return None
-            f = test_functions(self.multipliers_at(y_mid))[kind]
-            if f == 0:
-                break
-            if np.sign(f) == np.sign(f_lo):
-                lo, f_lo, lam_lo = h, f, self.lam(y_mid)
-                if side == -1:
-                    f_hi /= 2
-                side = -1
-            else:
-                hi, f_hi, lam_hi = h, f, self.lam(y_mid)
-                if side == 1:
-                    f_lo /= 2
-                side = 1
-            # Both brackets: near a fold λ is quadratic in the arclength, so a tight λ alone
-            # would leave the point (and its multiplier +1) loose.
-            if lam_hi is not None and abs(lam_hi - lam_lo) < LOCATE_TOL and hi - lo < 1e-9:
-                break
+            return test_functions(self.multipliers_at(y_mid))[kind], self.lam(y_mid), y_mid
+
+        # Both brackets: near a fold λ is quadratic in the arclength, so a tight λ alone would
+        # leave the point (and its multiplier +1) loose.
+        y_mid = regula_falsi(
+            evaluate, h_b, psi_a, psi_b, self.lam(y),
+            lambda lam_lo, lam_hi, lo, hi: abs(lam_hi - lam_lo) < LOCATE_TOL and hi - lo < 1e-9,
+        )  # fmt: skip
+        if y_mid is None:
+            return None
         model = self.model_at(y_mid)
         if model is None:
             return None
@@ -175,3 +165,53 @@ def bisect_boundary(try_at, h_fail, lam_lo, lam_hi, reason: str):
             if cycle is not None:
                 reason = cycle.message
     return lo, last, y_last, reason
+
+
+def regula_falsi(evaluate, h_b, f_a, f_b, lam_a, converged):
+    """Illinois regula falsi on the arclength ``h ∈ [0, h_b]`` for the zero of a test function
+    that changes sign from ``f_a`` (at 0) to ``f_b`` (at ``h_b``): the special points of a branch
+    and the codimension-two points of a curve.
+
+    Parameters
+    ----------
+    evaluate : callable
+        ``evaluate(h) -> (f, lam, point)`` at the point corrected at arclength ``h``, or None
+        where the corrector fails.
+    h_b, f_a, f_b : float
+        The bracket's far end and the test function at both ends.
+    lam_a : float or numpy.ndarray
+        The parameter value(s) at ``h = 0``.
+    converged : callable
+        ``converged(lam_lo, lam_hi, lo, hi) -> bool`` once both sides have been evaluated.
+
+    Returns
+    -------
+    object or None
+        The ``point`` of the last evaluation (after at most 60), or None if the corrector failed.
+    """
+    lo, hi, f_lo, f_hi = 0.0, h_b, f_a, f_b
+    lam_lo, lam_hi = lam_a, None
+    side, point = 0, None
+    for _ in range(60):
+        h = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+        if not lo < h < hi:
+            h = 0.5 * (lo + hi)
+        got = evaluate(h)
+        if got is None:
+            return None
+        f, lam, point = got
+        if f == 0:
+            break
+        if np.sign(f) == np.sign(f_lo):
+            lo, f_lo, lam_lo = h, f, lam
+            if side == -1:
+                f_hi /= 2
+            side = -1
+        else:
+            hi, f_hi, lam_hi = h, f, lam
+            if side == 1:
+                f_lo /= 2
+            side = 1
+        if lam_hi is not None and converged(lam_lo, lam_hi, lo, hi):
+            break
+    return point

@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..continuation.special import LOCATE_TOL, bisect_boundary
+from ..continuation.special import LOCATE_TOL, bisect_boundary, regula_falsi
 from ..result import LimitCycle
 from ..shooting import ShootingProblem, certify, shooting_problem
 from ..stability import section_jacobians
@@ -415,33 +415,22 @@ class CurveFollower:
     def _locate(self, y, chord, t, h_b, label, f_a, f_b):
         """Illinois regula falsi on the chord's arclength for a test function's zero, until the
         bracket is below 1e-10 in both parameters."""
-        lo, hi, f_lo, f_hi = 0.0, h_b, f_a, f_b
-        lam_lo, lam_hi = self.lam(y), None
-        side, y_mid, t_mid = 0, y, t
         row = self.weights(y) * chord
-        for _ in range(60):
-            h = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
-            if not lo < h < hi:
-                h = 0.5 * (lo + hi)
+
+        def evaluate(h):
             y_mid, ok, _ = self.correct(y + h * chord, row)
             if not ok:
                 return None
             t_mid = self.tangent(y_mid, t)
-            f = self.tests_at(y_mid, t_mid)[label]
-            if f == 0:
-                break
-            if np.sign(f) == np.sign(f_lo):
-                lo, f_lo, lam_lo = h, f, self.lam(y_mid)
-                if side == -1:
-                    f_hi /= 2
-                side = -1
-            else:
-                hi, f_hi, lam_hi = h, f, self.lam(y_mid)
-                if side == 1:
-                    f_lo /= 2
-                side = 1
-            if lam_hi is not None and np.max(np.abs(lam_hi - lam_lo)) < _LOCATE_TOL:
-                break
+            return self.tests_at(y_mid, t_mid)[label], self.lam(y_mid), (y_mid, h)
+
+        located = regula_falsi(
+            evaluate, h_b, f_a, f_b, self.lam(y),
+            lambda lam_lo, lam_hi, lo, hi: np.max(np.abs(lam_hi - lam_lo)) < _LOCATE_TOL,
+        )  # fmt: skip
+        if located is None:
+            return None
+        y_mid, h = located
         mu = self.multipliers_at(y_mid)
         if not codim2.is_genuine(label, mu, self.kind):
             return None

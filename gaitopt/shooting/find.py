@@ -152,21 +152,7 @@ def find_limit_cycle(
     problem = shooting_problem(type(model), disc, steps)
 
     def fail(message: str, status: str, **extra: Any) -> LimitCycle:
-        note = model.existence_note()
-        if note:
-            message = f"{message} [{note}]"
-        return LimitCycle(
-            False,
-            message,
-            model,
-            steps=steps,
-            state_names=model.state_names,
-            section_coordinates=model.section.coordinates,
-            inputs=u,
-            solve_time=time.perf_counter() - start,
-            status=status,
-            **extra,
-        )
+        return failed(model, steps, u, start, message, status, **extra)
 
     # -- guess: a previous orbit (warm start), or a simulation ------------------------------------
     explicit = guess is not None
@@ -247,21 +233,7 @@ def solve_gait(
     p = model.p
 
     def fail(message: str, status: str, **extra: Any) -> LimitCycle:
-        note = model.existence_note()
-        if note:
-            message = f"{message} [{note}]"
-        return LimitCycle(
-            False,
-            message,
-            model,
-            steps=steps,
-            state_names=model.state_names,
-            section_coordinates=model.section.coordinates,
-            inputs=u,
-            solve_time=time.perf_counter() - start,
-            status=status,
-            **extra,
-        )
+        return failed(model, steps, u, start, message, status, **extra)
 
     # -- solve, then refine the mesh until the discretisation error is below tol ---------------
     refinements, disc_error, singular = 0, float("nan"), False
@@ -383,4 +355,22 @@ def solve_gait(
         note=disc_error_note,
         start=start,
         evaluation=ev,
+    )
+
+
+def failed(model, steps: int, u, start: float, message: str, status: str, **extra) -> LimitCycle:
+    """The record of a search that found no gait: ``message`` (with the model's note on where its
+    gait exists) and ``status`` (one of :data:`gaitopt.result.STATUS`)."""
+    note = model.existence_note()
+    return LimitCycle(
+        False,
+        f"{message} [{note}]" if note else message,
+        model,
+        steps=steps,
+        state_names=model.state_names,
+        section_coordinates=model.section.coordinates,
+        inputs=u,
+        solve_time=time.perf_counter() - start,
+        status=status,
+        **extra,
     )

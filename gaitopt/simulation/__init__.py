@@ -151,7 +151,7 @@ def simulate(
         if feedforward is not None:  # the flow gets its own input buffer, rewritten per call
             funcs._flow = _Buffered(model.phases[phase].flow, np.array(u, dtype=float), p)
             funcs._drive = (feedforward, sec_t[-1] if sec_t else 0.0, max(len(sec_t) - 1, 0))
-        at_start = funcs.violated_at_start(x)
+        at_start = funcs.violated_at_start(x, t)
         if at_start is not None:
             constraint = model.phases[phase].constraints[at_start[0] - len(funcs.phase.transitions)]
             sim.events.append(Event(t, phase, constraint.outcome, x.copy(), None))

@@ -22,8 +22,8 @@ class _Buffered:
 
     def __init__(self, f: ca.Function, u: np.ndarray, p: np.ndarray):
         self._x = np.zeros(f.size1_in(0))
-        self._u = np.ascontiguousarray(u, dtype=float)
-        self._p = np.ascontiguousarray(p, dtype=float)
+        self._u = np.array(u, dtype=float)  # its own copy: a feedforward rewrites it
+        self._p = np.array(p, dtype=float)
         self._out = np.zeros(f.numel_out(0))
         self._buffer, self._trigger = f.buffer()
         for i, a in enumerate((self._x, self._u, self._p)):
@@ -83,10 +83,23 @@ class PhaseFunctions:
             self._jac = self.phase.flow.factory("jac", ["x", "u", "p"], ["jac:flow:x"])
         return np.asarray(self._jac(x, self.u, self.p))
 
-    def signed_guard(self, k: int, x: np.ndarray) -> float:
+    def at(self, t: float | None) -> None:
+        """Set the event functions' input to the feedforward's value at time ``t`` (s): guards,
+        admissibility and unilateral constraints see the input the flow sees (a stance foot's
+        normal force depends on the torque applied at that instant).  No-op without one."""
+        if self._drive is None or t is None:
+            return
+        feedforward, t_section, step = self._drive
+        u = feedforward(t - t_section, step)
+        for f in (*self._guards, *(a for a in self._admissible if a is not None)):
+            f._u[:] = u
+
+    def signed_guard(self, k: int, x: np.ndarray, t: float | None = None) -> float:
+        self.at(t)
         return self._directions[k] * float(self._guards[k](x)[0])
 
-    def admissible(self, k: int, x: np.ndarray) -> bool:
+    def admissible(self, k: int, x: np.ndarray, t: float | None = None) -> bool:
+        self.at(t)
         n_tr = len(self.phase.transitions)
         if k >= n_tr and self.constraints[k - n_tr].at_end:
             # A constraint that vanishes where the phase ends (a foot touching down) reaches 0
@@ -95,15 +108,18 @@ class PhaseFunctions:
         a = self._admissible[k]
         return a is None or float(a(x)[0]) > 0
 
-    def violated_at_start(self, x: np.ndarray) -> tuple[int, str] | None:
-        """A constraint that fails where the phase begins: one that starts active (``at_start``)
-        and does not rise (a trailing foot that does not lift off), or one already negative."""
+    def violated_at_start(self, x: np.ndarray, t: float | None = None) -> tuple[int, str] | None:
+        """A constraint that fails where the phase begins (at time ``t``): one that starts active
+        (``at_start``) and does not rise (a trailing foot that does not lift off), or one already
+        negative."""
+        self.at(t)
+        u = self._guards[0]._u if self._drive is not None else self.u
         n_tr = len(self.phase.transitions)
         for j, c in enumerate(self.constraints):
             value = float(self._guards[n_tr + j](x)[0])
             unit = f" {c.unit}" if c.unit else ""
             if c.at_start:
-                rate = float(rate_along(self.phase.flow, c.function)(x, self.u, self.p))
+                rate = float(rate_along(self.phase.flow, c.function)(x, u, self.p))
                 if not rate > _CONSTRAINT_RATE:
                     return (
                         n_tr + j,
@@ -185,7 +201,7 @@ def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_t
         kwargs = {"jac": funcs.jac} if method in ("Radau", "LSODA") else {}
         solver = solver_cls(funcs.rhs, t0, x0, t0 + max_time, rtol=rtol, atol=atol, **kwargs)
     directions = np.array(funcs._directions, dtype=float)[:, None]
-    values = np.array([funcs.signed_guard(k, x0) for k in range(n_tr)], dtype=float)
+    values = np.array([funcs.signed_guard(k, x0, t0) for k in range(n_tr)], dtype=float)
     armed = values < -_ARM
     short = _short_excursion(funcs, x0, armed)
     if short is not None:
@@ -204,7 +220,12 @@ def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_t
             signed = directions * compiled
         else:
             states = [dense(tt) for tt in grid[1:-1]] + [solver.y]
-            signed = np.array([[funcs.signed_guard(k, x) for x in states] for k in range(n_tr)])
+            signed = np.array(
+                [
+                    [funcs.signed_guard(k, x, tt) for x, tt in zip(states, grid[1:], strict=True)]
+                    for k in range(n_tr)
+                ]
+            )
         best = None
         signed = np.reshape(signed, (n_tr, _CHECKS_PER_STEP))
         before = np.concatenate([values[:, None], signed[:, :-1]], axis=1)
@@ -225,7 +246,7 @@ def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_t
                     previous, current = ends
                 if was_armed and previous < 0 <= current:
                     t_hit = brentq(
-                        lambda tt, k=k, dense=dense: funcs.signed_guard(k, dense(tt)),
+                        lambda tt, k=k, dense=dense: funcs.signed_guard(k, dense(tt), tt),
                         grid[j - 1],
                         grid[j],
                         xtol=1e-15,
@@ -233,7 +254,7 @@ def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_t
                         maxiter=200,
                     )
                     x_hit = dense(t_hit)
-                    if funcs.admissible(k, x_hit):
+                    if funcs.admissible(k, x_hit, t_hit):
                         if best is None or t_hit < best[0]:
                             best = (t_hit, k, x_hit)
                         break
