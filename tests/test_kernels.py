@@ -115,3 +115,29 @@ def test_index_loads_without_building_and_ignores_a_stale_entry(monkeypatch, tmp
         library.unlink()
     third = ModelKernels(cls, verbose=False)
     assert third.compiled and len(list(tmp_path.glob("*.so"))) == 1
+
+
+def test_compiled_verification_steps_equal_the_interpreted_ones():
+    # The verification's DOP853 step (state, rate, error norm, dense coefficients, events),
+    # compiled per model class, must give the interpreted CasADi function's numbers (same
+    # expression graph; measured identical, tolerance 1e-14 relative for compiler reassociation).
+    from gaitopt.dop853 import step_function
+    from gaitopt.kernels.verify import CHECKS_PER_STEP, phase_events, verification_steps
+
+    for name in ("compass_gait", "kneed_walker"):
+        model = gaitopt.model(name)
+        compiled = verification_steps(type(model))
+        for i, phase in enumerate(model.phases):
+            for constraints in (True, False):
+                events = phase_events(phase, constraints)
+                interpreted = step_function(phase.flow, events, CHECKS_PER_STEP)
+                x = model.lift(model.section_vector({})) if i == 0 else np.full(phase.n, 0.1)
+                args = [x, np.asarray(phase.flow(x, model.nominal_input(), model.p)).ravel(),
+                        0.01, np.array([0.25, 0.5, 0.75]), model.nominal_input(), model.p,
+                        np.array([1e-10, 1e-12])]  # fmt: skip
+                got = compiled[(i, constraints)](*args)
+                want = interpreted(*args)
+                for a, b in zip(got, want, strict=True):
+                    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+                    assert a.shape == b.shape
+                    assert np.allclose(a, b, rtol=1e-14, atol=1e-14)

@@ -1,5 +1,6 @@
 """``python -m gaitopt.kernels --warm [MODEL ...]``: compile (or find in the cache) the shooting
-kernels of the built-in models, so that no later call waits for the compiler."""
+kernels and the verification's DOP853 steps of the built-in models, so that no later call waits
+for the compiler."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import sys
 import time
 
 from . import cache_dir, model_kernels
+from .verify import verification_steps
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -24,6 +26,7 @@ def main(argv: list[str] | None = None) -> int:
     for name in names:
         start = time.perf_counter()
         kern = model_kernels(REGISTRY[name])
+        verification_steps(REGISTRY[name])  # the verification's DOP853 steps
         how = "none (SX unavailable)" if kern is None else (
             "compiled" if kern.compiled else "interpreted")  # fmt: skip
         print(f"{name:18s} {how:12s} {time.perf_counter() - start:6.2f} s", flush=True)

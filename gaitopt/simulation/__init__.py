@@ -147,7 +147,7 @@ def simulate(
         sec_x.append(x.copy())
     cycle_end = (len(model.phases) - 1, 0)  # (phase, transition) that closes a cycle
     while len(sec_t) - 1 < steps or (phase != 0 and steps > 0):
-        funcs = PhaseFunctions(model.phases[phase], u, p, constraints)
+        funcs = PhaseFunctions(model.phases[phase], u, p, constraints, type(model), phase)
         if feedforward is not None:  # the flow gets its own input buffer, rewritten per call
             funcs._flow = _Buffered(model.phases[phase].flow, np.array(u, dtype=float), p)
             funcs._drive = (feedforward, sec_t[-1] if sec_t else 0.0, max(len(sec_t) - 1, 0))

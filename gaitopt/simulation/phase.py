@@ -9,6 +9,7 @@ import casadi as ca
 import numpy as np
 
 from ..hybrid import Phase, rate_along
+from ..kernels.verify import CHECKS_PER_STEP
 
 __all__ = ["PhaseFunctions", "integrate_phase"]
 
@@ -42,8 +43,17 @@ class PhaseFunctions:
     Events are numbered: the phase's transitions first, then its unilateral constraints, each of
     which is a terminal event where ``c`` falls through zero (a trip, a leg that pulls)."""
 
-    def __init__(self, phase: Phase, u: np.ndarray, p: np.ndarray, constraints: bool = True):
+    def __init__(
+        self,
+        phase: Phase,
+        u: np.ndarray,
+        p: np.ndarray,
+        constraints: bool = True,
+        model_cls: type | None = None,
+        index: int | None = None,
+    ):
         self.phase = phase
+        self._compiled_key = (model_cls, index, bool(constraints))
         self.u, self.p = u, p
         self.constraints = phase.constraints if constraints else ()
         self._flow = _Buffered(phase.flow, u, p)
@@ -60,9 +70,17 @@ class PhaseFunctions:
         self._events += [c.function for c in self.constraints]
 
     def step_function(self) -> ca.Function:
-        """One DOP853 step with this phase's event functions (:mod:`gaitopt.dop853`)."""
+        """One DOP853 step with this phase's event functions (:mod:`gaitopt.dop853`): compiled
+        with the model class's kernels (:mod:`gaitopt.kernels.verify`) where known."""
         from ..dop853 import step_function
 
+        model_cls, index, constraints = self._compiled_key
+        if model_cls is not None:
+            from ..kernels.verify import verification_steps
+
+            steps = verification_steps(model_cls)
+            if steps is not None:
+                return steps[(index, constraints)]
         return step_function(self.phase.flow, self._events, _CHECKS_PER_STEP)
 
     @property
@@ -175,10 +193,9 @@ def _rests_on_guard(funcs: PhaseFunctions, x0: np.ndarray) -> str | None:
     return None
 
 
-# Interior points per integrator step where the guards are also checked (on the dense output):
-# a guard excursion shorter than a step (a wheel that rocks back onto a spoke within
-# milliseconds) is still seen.
-_CHECKS_PER_STEP = 4
+# Interior points per integrator step where the guards are also checked (see
+# gaitopt.kernels.verify.CHECKS_PER_STEP).
+_CHECKS_PER_STEP = CHECKS_PER_STEP
 
 
 def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_time, method):
