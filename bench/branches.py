@@ -1,4 +1,4 @@
-"""Benchmarks of the bifurcation tools (issue 4, item 7), run by ``make bench``.
+"""Benchmarks of the bifurcation tools run by ``make bench``.
 
 * **points per second along a branch** — the compass gait's period-1 branch from slope 0.0525
   to 0.075, every point certified and verified by simulation;
@@ -143,7 +143,7 @@ def table(result: dict[str, Any]) -> str:
     """The measurements as printed lines."""
     b, s, w = result["branch_rate"], result["slope_study"], result["sweep_throughput"]
     lines = [
-        "Continuation and sweeps (issue 4):",
+        "Continuation and sweeps:",
         f"  points along a branch: {b['points']} certified gaits in {b['seconds']:.2f} s = "
         f"{b['points_per_second']:.0f} points/s (each verified by simulation: {b['verified']})",
         f"  compass gait vs slope, continuation through {len(s['period_doublings'])} period "

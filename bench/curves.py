@@ -1,4 +1,4 @@
-"""Benchmark of two-parameter curves (issue 14), run by ``make bench``.
+"""Benchmark of two-parameter curves, run by ``make bench``.
 
 The compass gait's stability boundary in slope × mass ratio (μ = m_H/m from 0.1 to 10 at
 ``mass_leg`` = 5 kg), two ways:
@@ -176,7 +176,7 @@ def table(result: dict[str, Any]) -> str:
     """The measurement as printed lines."""
     r = result
     lines = [
-        "Two-parameter curves (issue 14): compass-gait stability boundary, slope × m_H/m 0.1–10",
+        "Two-parameter curves: compass-gait stability boundary, slope × m_H/m 0.1–10",
         f"  PD curve: {r['curve_points']} certified gaits (verified: {r['curve_all_verified']}), "
         f"{r['curve_seconds_cold']:.2f} s cold (building the CasADi functions), "
         f"{r['curve_seconds_warm']:.2f} s warm (steps up to {r['curve_steps']['max_step']:g})",

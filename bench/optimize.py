@@ -1,4 +1,4 @@
-"""Benchmarks of optimal gait synthesis (issue 11, item 10), run by ``make bench``.
+"""Benchmarks of optimal gait synthesis run by ``make bench``.
 
 * **compass gait, level ground, 0.3 m in 0.8 s, least effort** — :func:`gaitopt.optimize_gait`
   (Radau collocation, refined to a discretisation error below 1e-8, verified by simulation)
@@ -8,7 +8,7 @@
 * **five-link biped, OptimTraj's problem** (0.4 m in 0.6 s, ``∫Σu² dt``) — the time of one start
   (start 0, verified), against the goal of 2 s per start.
 
-Goals (issue 11): the compass gait's optimum, verified, in ≤ 0.3 s once built; the five-link
+Goals: the compass gait's optimum, verified, in ≤ 0.3 s once built; the five-link
 biped ≤ 2 s per start.  Times are wall-clock on this machine; the first call includes building
 and compiling the NLP, the second is measured again from scratch (the transcription is rebuilt
 on every call).
@@ -146,7 +146,7 @@ def table(record: dict[str, Any]) -> str:
     c = record["compass_gait"]
     b = c["baseline"]
     lines = [
-        "optimal gaits (issue 11):",
+        "optimal gaits:",
         f"  compass gait effort {c['cost']:.10g} N²·m²·s (verified {c['verified']}, "
         f"discretisation error {c['discretisation_error']:.2g}); "
         f"{c['time_first_s']:.2f} s first call, {c['time_second_s']:.2f} s second (goal 0.3 s)",

@@ -1,6 +1,6 @@
 """What the measured gaits are compared with: the reference numbers (docs/design.md, the papers),
 the errors of each fixed point against gaitopt's and the references, and the compass-gait goals
-(issue 2, item 11)."""
+(the compass-gait goals)."""
 
 from __future__ import annotations
 

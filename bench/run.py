@@ -142,7 +142,7 @@ def run(
         record["models"][name] = entry
     record["goals"] = _goals(record)
     if speed:
-        log("[bench] issue 12: whole processes (gaitopt and Drake), period-8 vs period-1")
+        log("[bench] speed goals: whole processes (gaitopt and Drake), period-8 vs period-1")
         try:
             record["speed"] = _bench_speed.run(repeats=repeats, drake=drake is not None)
         except Exception as err:  # report, never sink the benchmark
@@ -219,7 +219,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--no-speed",
         action="store_true",
-        help="skip issue 12's whole-process and period-k timings",
+        help="skip the whole-process and period-k timings",
     )
     parser.add_argument(
         "--quick",

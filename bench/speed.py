@@ -1,4 +1,4 @@
-"""The speed goals of issue 12, each against its baseline measured in the same run.
+"""The speed goals, each against its baseline measured in the same run.
 
 * **whole process** — ``gaitopt solve compass_gait --json`` as a fresh process (kernel cache
   warm), median of ``repeats``; against Drake's whole process where ``pydrake`` imports: a fresh
@@ -212,7 +212,7 @@ def table(record: dict[str, Any]) -> str:
     def verdict(key: str) -> str:
         return "n/a" if key not in g else ("met" if g[key] else "NOT met")
 
-    lines = ["Speed goals (issue 12), ratios within this run:"]
+    lines = ["Speed goals, ratios within this run:"]
     lines.append("  verified warm solve (find_limit_cycle(m), verify=True), every model:")
     for name, e in record["models"].items():
         b = e["once_built"]

@@ -151,7 +151,7 @@ def format_table(record: dict[str, Any]) -> str:
 
         lines += [
             "",
-            "Compass-gait goals (issue 2, item 11):",
+            "Compass-gait goals:",
             f"  cycle with multipliers once built ≤ 2 ms: "
             f"{_ms(g['cycle_with_multipliers_once_built_s'])} ms — {verdict(g['at_most_2ms'])}",
         ]

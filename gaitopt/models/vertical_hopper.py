@@ -83,7 +83,7 @@ from .blocks import apex, ballistic_flow, fall
 __all__ = ["VerticalHopper"]
 
 _RAIBERT = "Raibert 1986, Legged Robots That Balance, ch. 2"
-_CHOSEN = "chosen (issue 6): a 10 kg body, 0.5 m leg, stance natural frequency 20 rad/s"
+_CHOSEN = "chosen: a 10 kg body, 0.5 m leg, stance natural frequency 20 rad/s"
 
 
 @dataclass(frozen=True)
@@ -143,7 +143,7 @@ class VerticalHopper(HybridModel):
         0.7,
         unit="m",
         doc="desired apex height h_d of the body (E_d = m g h_d)",
-        source="issue 6: 0.2 m of flight above the 0.5 m leg",
+        source="chosen: 0.2 m of flight above the 0.5 m leg",
         low=0.0,
         high=100.0,
         low_open=True,

@@ -103,7 +103,7 @@ def find_limit_cycle(
         If an explicit ``guess`` never reaches the next transition in simulation.
     """
     start = time.perf_counter()
-    # -- arguments: every check before any work (issue 9: bad input fails fast) ----------------
+    # -- arguments: every check before any work (bad input fails fast) ----------------
     from ..arguments import check_count, check_inputs, check_positive, check_start, section_guess
     from ..errors import MAX_ORBIT_STEPS, StateError
     from ..models import as_model

@@ -96,7 +96,7 @@ def simulate(
     -------
     Simulation
     """
-    # -- arguments: every check before any work (issue 9: bad input fails fast) ----------------
+    # -- arguments: every check before any work (bad input fails fast) -------------------------
     from ..arguments import check_count, check_inputs, check_positive, check_start
     from ..errors import MAX_SIMULATION_STEPS
     from ..models import as_model
