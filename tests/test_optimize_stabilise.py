@@ -23,7 +23,7 @@ from gaitopt.cli import main
 from gaitopt.errors import GaitoptInputError
 from gaitopt.optimize import OptimalGait, optimize_gait, stabilise
 from gaitopt.optimize.floquet import return_map_jacobian
-from gaitopt.optimize.stabilise import offset_jacobian, offset_jacobian_fd
+from gaitopt.optimize.stabilisation import offset_jacobian, offset_jacobian_fd
 
 LEVEL = {"period": 0.8, "step_length": 0.3}
 ORBITS = 8

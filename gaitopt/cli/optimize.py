@@ -204,7 +204,7 @@ def run(args: argparse.Namespace) -> int:
     report = gait.to_json(minima=args.starts > 1)
     stabilised = True
     if args.stabilise:
-        from ..optimize.stabilise import stabilise
+        from ..optimize import stabilise
 
         if gait.success:
             with _solver_output_to_stderr():

@@ -7,8 +7,8 @@
 * :mod:`~gaitopt.optimize.verify` and :mod:`~gaitopt.optimize.floquet` — trust: dense checks,
   independent simulation, multipliers two ways;
 * :mod:`~gaitopt.optimize.result` — :class:`OptimalGait`;
-* :mod:`~gaitopt.optimize.stabilise` — a per-step input offset (LQR) that stabilises an
-  unstable optimum, checked in simulation;
+* :mod:`~gaitopt.optimize.stabilisation` — :func:`stabilise`: a per-step input offset (LQR)
+  that stabilises an unstable optimum, checked in simulation;
 * :mod:`~gaitopt.optimize.library` — libraries of optima continued in a constraint (folds,
   active-set changes, cold-start checks) and multi-starts on Dask.
 """
@@ -21,7 +21,7 @@ from .problem import COSTS, GaitProblem
 from .profile import InputProfile
 from .result import Minimum, OptimalGait
 from .solve import optimize_gait, solve_problem
-from .stabilise import Stabilisation, stabilise
+from .stabilisation import Stabilisation, stabilise
 
 __all__ = [
     "optimize_gait",
