@@ -335,6 +335,13 @@ class Collocation:
             add(f"dynamics ({label})", ca.horzcat(*defects))
             x_end, u_end = Xk[:, -1], Uk[:, -1]
             add(f"guard '{tr.name}' at the end of {label}", tr.guard(x_end, u_end, p))
+            if tr.admissible is None and Xc.shape[1] > 1:
+                # A guard without an admissibility test ends the phase wherever it is crossed
+                # (the simulator's event): it keeps its side, direction · g ≤ 0, at the
+                # interior nodes (the kneed walker's knee must not straighten early).
+                inner = tr.guard.map(Xc.shape[1] - 1)(Xc[:, :-1], Uk[:, :-1], p)
+                inner = tr.direction * inner + self._phase_margin(hs, Tk)[:, :-1]
+                add(f"'{tr.name}' not before the end of {label}", inner, -np.inf)
             rate = rate_along(phase.flow, tr.guard)(x_end, u_end, p)
             add(
                 f"crossing direction of '{tr.name}' ({label})",
@@ -350,11 +357,15 @@ class Collocation:
                     np.inf,
                 )
             u_start = ca.mtimes(Uk[:, :d], ca.DM(self.u_at_start))
+            margin, margin0 = self._clearance_margin(T, hs, k)
             for c in getattr(phase, "constraints", ()):
                 nodes = Xk[:, 1:-1] if c.at_end else Xk[:, 1:]
                 unodes = Uk[:, :-1] if c.at_end else Uk
+                # A length (a foot's height) keeps the problem's clearance margin.
+                lift = margin if c.unit == "m" else ca.MX.zeros(1, N * d)
                 if nodes.shape[1]:
                     values = c.function.map(nodes.shape[1])(nodes, unodes, p)
+                    values = values - (lift[:, :-1] if c.at_end else lift)
                     add(f"'{c.name}' ({label})", values, 0.0, np.inf)
                 if c.at_start:
                     rate_c = rate_along(phase.flow, c.function)(Xk[:, 0], u_start, p)
@@ -362,7 +373,7 @@ class Collocation:
                 else:
                     add(
                         f"'{c.name}' at the start of {label}",
-                        c.function(Xk[:, 0], u_start, p),
+                        c.function(Xk[:, 0], u_start, p) - (margin0 if c.unit == "m" else 0.0),
                         0.0,
                         np.inf,
                     )
@@ -459,6 +470,36 @@ class Collocation:
         }
         self._X, self._U, self._T = X, U, T
         self._theta = Th
+
+    def _clearance_margin(self, T: list[ca.MX], hs: list[Any], k: int) -> tuple[Any, Any]:
+        """The clearance margin ``c · sin(π t / T_step)`` (m) at the collocation nodes of phase
+        ``k`` (a 1 × N·d row) and at its start, ``t`` the time since its step's section
+        (:attr:`GaitProblem.clearance`; zeros when it is 0)."""
+        c = self.problem.clearance
+        if not c:
+            return ca.MX.zeros(1, self.N * self.d), 0.0
+        n_cycle = len(self.model.phases)
+        first = n_cycle * (k // n_cycle)
+        before = ca.sum1(ca.vertcat(*T[first:k])) if k > first else ca.MX(0)
+        step = ca.sum1(ca.vertcat(*T[first : first + n_cycle]))
+        times, edge = [], before
+        for h in hs:
+            times.extend(edge + h * tau for tau in self.tau[1:])
+            edge = edge + h
+        row = ca.horzcat(*times)
+        return c * ca.sin(np.pi * row / step), c * ca.sin(np.pi * before / step)
+
+    def _phase_margin(self, hs: list[Any], Tk: ca.MX) -> Any:
+        """``m · sin(π t / T)`` at the collocation nodes of a phase (a 1 × N·d row), ``t`` the
+        time since the phase began (:attr:`GaitProblem.guard_margin`; zeros when it is 0)."""
+        m = self.problem.guard_margin
+        if not m:
+            return ca.MX.zeros(1, self.N * self.d)
+        times, edge = [], ca.MX(0)
+        for h in hs:
+            times.extend(edge + h * tau for tau in self.tau[1:])
+            edge = edge + h
+        return m * ca.sin(np.pi * ca.horzcat(*times) / Tk)
 
     # -- evaluation ---------------------------------------------------------------------------
     @cached_property

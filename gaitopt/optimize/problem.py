@@ -126,6 +126,20 @@ class GaitProblem:
         Least rate at which each phase's guard is crossed at its end, ``direction · ġ`` (guard
         units per second): a transversal touchdown, not a graze, which no simulation could
         locate robustly.  Reported among the active constraints when it binds.
+    clearance : float
+        Least margin ``c`` (m) of the model's length-valued unilateral constraints (unit
+        ``"m"``: a swing foot above the ground) over each step: ``h(x) ≥ c · sin(π t / T)`` at
+        every collocation node, ``t`` the time since the step's section and ``T`` the step's
+        duration (0 where the foot leaves and meets the ground, ``c`` at mid-step).  Default 0:
+        a foot may skim the ground, ``h = 0`` over a stretch (a boundary arc), which neither the
+        dense check between the nodes nor a simulation can confirm; a real foot needs a margin.
+    guard_margin : float
+        Margin ``m`` (the guard's unit) by which a guard without an admissibility test (the
+        kneed walker's knee strike, rad) stays short of its crossing inside the phase it ends:
+        ``direction · g ≤ −m · sin(π t / T)`` at the interior nodes, ``t`` the time since the
+        phase began and ``T`` its duration.  Default 0: ``direction · g ≤ 0``, where a guard may
+        touch 0 over a stretch (a knee held straight by its torque before it locks), which no
+        simulation can confirm.
     """
 
     model: HybridModel
@@ -140,6 +154,8 @@ class GaitProblem:
     max_phase_time: float = 10.0
     regularisation: float = 0.0
     min_crossing_rate: float = 1e-2
+    clearance: float = 0.0
+    guard_margin: float = 0.0
 
     def __post_init__(self) -> None:
         model = self.model
@@ -191,6 +207,20 @@ class GaitProblem:
                     f"`speed` {self.speed:g} contradicts step_length/period = "
                     f"{self.step_length * self.steps / self.period:g}; fix at most two of them"
                 )
+        clearance = float(self.clearance) if isinstance(self.clearance, (int, float)) else -1.0
+        if not (math.isfinite(clearance) and clearance >= 0):
+            raise GaitoptInputError(
+                f"`clearance` must be a finite length >= 0 (m), got {self.clearance!r}; "
+                f"e.g. clearance=0.01"
+            )
+        object.__setattr__(self, "clearance", clearance)
+        margin = float(self.guard_margin) if isinstance(self.guard_margin, (int, float)) else -1.0
+        if not (math.isfinite(margin) and margin >= 0):
+            raise GaitoptInputError(
+                f"`guard_margin` must be a finite number >= 0 (the guard's unit), got "
+                f"{self.guard_margin!r}; e.g. guard_margin=0.05"
+            )
+        object.__setattr__(self, "guard_margin", margin)
         if not isinstance(self.steps, int) or self.steps < 1:
             raise GaitoptInputError(f"`steps` must be a positive integer, got {self.steps!r}")
         for name, value in dict(self.bounds).items():
@@ -376,6 +406,8 @@ class GaitProblem:
             "state_bounds": {k: list(v) for k, v in dict(self.state_bounds).items()},
             "free": list(self.free),
             "steps": self.steps,
+            **({"clearance": self.clearance} if self.clearance else {}),
+            **({"guard_margin": self.guard_margin} if self.guard_margin else {}),
         }
 
 
