@@ -126,3 +126,17 @@ def test_cli_library(capsys, tmp_path):
     assert (tmp_path / "library.json").exists() and (tmp_path / "library.csv").exists()
     bad = ["optimize", "compass_gait", "--library", "step_length=0.2:0.3"]
     assert main(bad) == 2
+
+
+def test_problem_data_round_trips_every_option():
+    # A Dask worker rebuilds the problem from plain data: every option must survive, the
+    # kneed walker's clearance and knee margins included (exact equality of the statement).
+    from gaitopt.optimize.library.workers import problem_data, problem_from
+    from gaitopt.optimize.problem import as_problem
+
+    problem = as_problem(
+        gaitopt.model("kneed_walker"), cost="effort", clearance=0.01, guard_margin=0.05
+    )
+    rebuilt = problem_from(problem_data(problem))
+    assert rebuilt.describe() == problem.describe()
+    assert (rebuilt.clearance, rebuilt.guard_margin) == (0.01, 0.05)

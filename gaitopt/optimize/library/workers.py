@@ -66,6 +66,8 @@ def problem_from(data: Mapping[str, Any]) -> GaitProblem:
         max_phase_time=float(data["max_phase_time"]),
         regularisation=float(data["regularisation"]),
         min_crossing_rate=float(data["min_crossing_rate"]),
+        clearance=float(data.get("clearance", 0.0)),
+        guard_margin=float(data.get("guard_margin", 0.0)),
     )
 
 
