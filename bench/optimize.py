@@ -24,7 +24,7 @@ import numpy as np
 
 from gaitopt.models import model as make_model
 from gaitopt.optimize import optimize_gait
-from gaitopt.optimize.collocation import rate_along
+from gaitopt.hybrid import rate_along
 from gaitopt.optimize.problem import GaitProblem
 
 __all__ = ["run", "hermite_simpson_compass", "table"]

@@ -1,0 +1,133 @@
+"""An optimum solved to its tolerance becomes an :class:`OptimalGait` only if it passes every check:
+dense samples of guards and constraints, the independent simulation with its input profile, the
+same cost in simulation, and its Floquet multipliers by AD and by finite differences."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..result import OrbitArc
+from ..stability import is_stable
+from .active import _active
+from .collocation import Collocation
+from .floquet import multipliers_of, return_map_jacobian
+from .problem import GaitProblem
+from .result import OptimalGait
+from .verify import (
+    check_dense,
+    map_jacobian_fd,
+    profiles,
+    simulate_gait,
+    simulated_cost,
+)
+
+
+def _certify(
+    problem: GaitProblem, col: Collocation, w: np.ndarray, stats: dict[str, Any], verify: bool
+) -> OptimalGait:
+    """Checks and the result object of a converged solution ``w``."""
+    model = problem.model
+    p = model.p
+    sol = col.unpack(w, p)
+    free_values = dict(zip(problem.free, map(float, sol["free"]), strict=True))
+    gait_model = model.replace(**free_values) if free_values else model
+    x_star = gait_model.lift(sol["s"])
+    profs = profiles(col, sol)
+    period = sol["period"]
+    step_length = sol["distance"] / problem.steps if problem.footholds() else None
+    t_grid, u_grid, orbit = [], [], []
+    t0 = 0.0
+    dense = np.linspace(0.0, 1.0, col.N * 8 + 1)
+    for k, i in enumerate(col.chain):
+        X, U = col.evaluate(sol["X"][k], sol["U"][k], dense, sol["breaks"][k])
+        t = t0 + dense * sol["T"][k]
+        arc = OrbitArc(
+            i, model.phases[i].name, model.phases[i].states, t, X,
+            model.phases[i].transitions[0].name,
+        )  # fmt: skip
+        arc.u = U  # type: ignore[attr-defined]
+        orbit.append(arc)
+        t_grid.append(t if k == 0 else t[1:])
+        u_grid.append(U if k == 0 else U[:, 1:])
+        t0 += sol["T"][k]
+    t_all = np.concatenate(t_grid)
+    u_all = np.hstack(u_grid)
+    inputs = {"time": t_all.tolist(), **{n: u_all[j].tolist() for j, n in enumerate(model.inputs)}}
+    result = OptimalGait(
+        False,
+        "",
+        gait_model,
+        problem.cost_kind,
+        cost=sol["cost"],
+        period=period,
+        step_length=step_length,
+        speed=(sol["distance"] / period) if step_length is not None else None,
+        fixed_point=dict(zip(model.state_names, map(float, x_star), strict=True)),
+        inputs=inputs,
+        profiles=profs,
+        durations=sol["T"],
+        active_constraints=_active(col, w, p),
+        params=gait_model.params,
+        iterations=int(stats.get("iter_count", 0)),
+        problem=problem.describe(),
+        orbit=orbit,
+    )
+    problem_msg = check_dense(col, sol)
+    if problem_msg is None and problem.cost_kind in ("work", "cot") and col.structure is None:
+        B = col.blocks
+        overlap = max(
+            float(np.max(np.minimum(B.get(w, f"Pplus{k}"), B.get(w, f"Pminus{k}"))))
+            for k in range(len(col.chain))
+        )
+        if overlap > 1e-6:
+            problem_msg = f"the power split is not complementary (p⁺p⁻ overlap {overlap:.2g} W)"
+    if problem_msg is not None:
+        result.message = "not a gait: " + problem_msg
+        return result
+    if not verify:
+        result.success = True
+        result.message = "optimal gait found (not verified: verify=False)"
+        return result
+
+    sim = simulate_gait(problem, gait_model, x_star, profs, problem.steps)
+    if not sim.success or len(sim.arcs) != len(col.chain):
+        result.message = (
+            "the optimum is not confirmed by simulation: "
+            + (sim.message if not sim.success else f"{len(sim.arcs)} phases instead of "
+               f"{len(col.chain)}")
+        )  # fmt: skip
+        return result
+    error = float(np.max(np.abs(sim.section_states[-1] - x_star)))
+    sim_cost = simulated_cost(problem, gait_model, sim, profs)
+    cost_error = abs(sim_cost - sol["cost"]) / max(abs(sol["cost"]), 1e-300)
+    cost_ok = abs(sim_cost - sol["cost"]) <= 1e-6 * abs(sol["cost"]) + 1e-12
+    state_ok = error <= 1e-6 * (1 + float(np.max(np.abs(x_star))))
+    result.verification = {
+        "return_error": error,
+        "cost_simulated": sim_cost,
+        "cost_error": cost_error if sol["cost"] != 0 else abs(sim_cost),
+        "period_simulated": float(sim.section_times[-1]),
+    }
+    result.verified = bool(state_ok and cost_ok)
+
+    A = return_map_jacobian(col, w, p)
+    result.multipliers = multipliers_of(A)
+    A_fd = map_jacobian_fd(problem, gait_model, sol["s"], profs)
+    if A_fd is not None:
+        result.multipliers_fd = multipliers_of(A_fd)
+    result.stable = is_stable(result.multipliers)
+    if not result.verified:
+        result.message = (
+            f"the optimum is not confirmed by simulation: it returns {error:.3g} away and costs "
+            f"{sim_cost:.10g} against {sol['cost']:.10g}"
+        )
+        return result
+    result.success = True
+    result.message = (
+        f"optimal gait found (IPOPT {stats.get('return_status')}, {result.iterations} "
+        f"iterations); verified by simulation: return error {error:.2g}, cost "
+        f"{sim_cost:.10g} simulated"
+    )
+    return result

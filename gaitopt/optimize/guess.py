@@ -1,0 +1,86 @@
+"""Starting points of the gait optimisation: a simulation from a seeded start with an input
+profile, or a previous optimum (warm start) interpolated onto another transcription."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..simulation import simulate
+from .collocation import Collocation
+from .problem import GaitProblem
+from .result import OptimalGait
+
+
+def _guess_from_simulation(
+    col: Collocation, problem: GaitProblem, s0: np.ndarray, rng: np.random.Generator | None
+) -> np.ndarray:
+    model = problem.model
+    p = model.p
+    n_u = len(model.inputs)
+    sim = simulate(model, model.lift(s0), steps=problem.steps, max_phase_time=5.0)
+    arcs = sim.arcs
+    chain = col.chain
+    states, durations = [], []
+    for k, i in enumerate(chain):
+        arc = arcs[k] if k < len(arcs) and arcs[k].phase == i else None
+        if arc is None or not arc.t1 > arc.t0:
+            x0 = model.lift(s0) if i == 0 else np.zeros(model.phases[i].n)
+            states.append(lambda t, x0=x0: np.tile(x0[:, None], (1, np.size(t))))
+            durations.append(0.5)
+        else:
+            states.append(
+                lambda t, a=arc: np.atleast_2d(a.solution(a.t0 + np.asarray(t) * (a.t1 - a.t0)))
+            )
+            durations.append(arc.t1 - arc.t0)
+    durations = np.array(durations)
+    target = problem.period
+    if target is None and problem.speed and problem.step_length:
+        target = problem.step_length * problem.steps / problem.speed
+    if target is not None:
+        durations = durations * target / durations.sum()
+    low, high = problem.input_bounds()
+    reach = np.maximum(np.abs(low), np.abs(high))
+    amplitude = np.minimum(np.where(np.isfinite(reach), reach, 1.0), 1.0)
+    phases_ = rng.uniform(0, 2 * np.pi, n_u) if rng is not None else np.zeros(n_u)
+    scale = 0.5 * amplitude if rng is not None else np.zeros(n_u)
+
+    def inputs(t: np.ndarray) -> np.ndarray:
+        t = np.atleast_1d(t)
+        return scale[:, None] * np.sin(2 * np.pi * t[None, :] + phases_[:, None])
+
+    free = np.array([model.params[n] for n in problem.free])
+    return col.pack(s0, free, states, [inputs] * len(chain), durations, p)
+
+
+def _guess_from_gait(col: Collocation, gait: OptimalGait) -> np.ndarray:
+    model = col.model
+    problem = col.problem
+    states, inputs = [], []
+    for k in range(len(col.chain)):
+        arc = gait.orbit[k]
+        tau = (arc.t - arc.t[0]) / (arc.t[-1] - arc.t[0])
+        states.append(
+            lambda t, arc=arc, tau=tau: np.array([np.interp(t, tau, row) for row in arc.x])
+        )
+        us = arc.u  # type: ignore[attr-defined]
+        inputs.append(lambda t, us=us, tau=tau: np.array([np.interp(t, tau, row) for row in us]))
+    s0 = model.section_coordinates_of(model.state_vector(gait.fixed_point))
+    free = np.array([gait.params.get(n, model.params[n]) for n in problem.free])
+    return col.pack(s0, free, states, inputs, np.asarray(gait.durations), model.p)
+
+
+def _start_guess(
+    col: Collocation, problem: GaitProblem, start: int, seed: int, gait: OptimalGait | None
+) -> np.ndarray:
+    model = problem.model
+    if start == 0 and gait is not None:
+        return _guess_from_gait(col, gait)
+    s0 = model.section_vector(model.default_start())
+    if start == 0:
+        return _guess_from_simulation(col, problem, s0, None)
+    rng = np.random.default_rng([seed, start])
+    s = s0 * (1 + 0.3 * rng.uniform(-1, 1, s0.size)) + 0.05 * rng.normal(size=s0.size)
+    return _guess_from_simulation(col, problem, s, rng)
+
+
+# -- the solve ---------------------------------------------------------------------------------
