@@ -1,36 +1,65 @@
-"""``python -m gaitopt.kernels --warm [MODEL ...]``: compile (or find in the cache) the shooting
-kernels and the verification's DOP853 steps of the built-in models, so that no later call waits
-for the compiler."""
+"""``python -m gaitopt.kernels --warm [--jobs N] [MODEL ...]``: compile (or find in the cache) the
+shooting kernels and the verification's DOP853 steps of the built-in models, so that no later call
+waits for the compiler.  ``--jobs`` compiles that many models at once (default: the number of
+CPUs); the cache is safe for concurrent compiles."""
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
 
-from . import cache_dir, model_kernels
-from .verify import verification_steps
+
+def _warm(name: str) -> tuple[str, str, float]:
+    """Compile (or load) one registered model's kernels; ``(name, how, seconds)``."""
+    from ..models import REGISTRY
+    from . import model_kernels
+    from .verify import verification_steps
+
+    start = time.perf_counter()
+    kern = model_kernels(REGISTRY[name])
+    verification_steps(REGISTRY[name])  # the verification's DOP853 steps
+    how = "none (SX unavailable)" if kern is None else (
+        "compiled" if kern.compiled else "interpreted")  # fmt: skip
+    return name, how, time.perf_counter() - start
 
 
 def main(argv: list[str] | None = None) -> int:
+    from . import cache_dir
+
     parser = argparse.ArgumentParser(prog="python -m gaitopt.kernels", description=__doc__)
     parser.add_argument("--warm", action="store_true", help="compile the kernels now")
+    parser.add_argument(
+        "--jobs", type=int, default=os.cpu_count() or 1, help="models compiled at once"
+    )
     parser.add_argument("models", nargs="*", help="model names (default: every registered one)")
     args = parser.parse_args(argv)
     from ..models import REGISTRY
 
     names = args.models or list(REGISTRY)
+    unknown = [n for n in names if n not in REGISTRY]
+    if unknown:
+        parser.error(f"unknown model {unknown[0]!r}; models: {', '.join(REGISTRY)}")
     if not args.warm:
         print(f"kernel cache: {cache_dir()}")
         return 0
-    for name in names:
-        start = time.perf_counter()
-        kern = model_kernels(REGISTRY[name])
-        verification_steps(REGISTRY[name])  # the verification's DOP853 steps
-        how = "none (SX unavailable)" if kern is None else (
-            "compiled" if kern.compiled else "interpreted")  # fmt: skip
-        print(f"{name:18s} {how:12s} {time.perf_counter() - start:6.2f} s", flush=True)
+    if args.jobs <= 1 or len(names) == 1:
+        for result in map(_warm, names):
+            _report(*result)
+        return 0
+    # The slowest compiles first, so that the pool does not end waiting on one of them.
+    slow = ("five_link_biped", "kneed_walker", "strandbeest")
+    order = sorted(names, key=lambda n: n not in slow)
+    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+        for result in pool.map(_warm, order):
+            _report(*result)
     return 0
+
+
+def _report(name: str, how: str, seconds: float) -> None:
+    print(f"{name:18s} {how:12s} {seconds:6.2f} s", flush=True)
 
 
 if __name__ == "__main__":
