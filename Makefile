@@ -19,7 +19,7 @@ gaits: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m gaitopt.gaits --out results
 
 test: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n auto  # one worker per CPU (pytest-xdist)
 
 studies: $(STAMP)
 	@set -e; for script in problems/*.py; do \
