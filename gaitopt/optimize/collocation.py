@@ -254,6 +254,12 @@ class Collocation:
             x_next = tr.reset(x_end, u_end, p)
             if k + 1 < len(self.chain):
                 add(f"reset after {label}", X[k + 1][:, 0] - x_next)
+            smooth = [r for r in range(len(model.inputs)) if r not in problem.impulsive_index]
+            if problem.continuous_inputs and smooth and (k + 1) % len(model.phases):
+                # The profile has no jump inside a step (GaitProblem.continuous_inputs): the next
+                # phase's input polynomial starts where this one ends.
+                u_next = ca.mtimes(U[k + 1][:, :d], ca.DM(self.u_at_start))
+                add(f"inputs continuous after {label}", u_next[smooth] - u_end[smooth])
             else:
                 add("periodicity", x_next[self.section_index] - s)
             step = problem.step_vector(i, x_end, p)

@@ -140,6 +140,14 @@ class GaitProblem:
         phase began and ``T`` its duration.  Default 0: ``direction · g ≤ 0``, where a guard may
         touch 0 over a stretch (a knee held straight by its torque before it locks), which no
         simulation can confirm.
+    continuous_inputs : bool
+        Inputs other than impulses are continuous where one phase of a step hands over to the
+        next (the kneed walker's knee strike): the profile, a function of the time since the
+        section, has no jump inside a step.  With a jump there, a perturbed step whose phase
+        change comes a little later sees the next phase's input for that while, so the return
+        map has different derivatives on either side and no Floquet multipliers; an actuator's
+        torque cannot jump either.  Default True; it constrains only models with more than one
+        phase per step.
     """
 
     model: HybridModel
@@ -156,6 +164,7 @@ class GaitProblem:
     min_crossing_rate: float = 1e-2
     clearance: float = 0.0
     guard_margin: float = 0.0
+    continuous_inputs: bool = True
 
     def __post_init__(self) -> None:
         model = self.model
@@ -221,6 +230,10 @@ class GaitProblem:
                 f"{self.guard_margin!r}; e.g. guard_margin=0.05"
             )
         object.__setattr__(self, "guard_margin", margin)
+        if not isinstance(self.continuous_inputs, bool):
+            raise GaitoptInputError(
+                f"`continuous_inputs` must be True or False, got {self.continuous_inputs!r}"
+            )
         if not isinstance(self.steps, int) or self.steps < 1:
             raise GaitoptInputError(f"`steps` must be a positive integer, got {self.steps!r}")
         for name, value in dict(self.bounds).items():
@@ -408,6 +421,7 @@ class GaitProblem:
             "steps": self.steps,
             **({"clearance": self.clearance} if self.clearance else {}),
             **({"guard_margin": self.guard_margin} if self.guard_margin else {}),
+            **({} if self.continuous_inputs else {"continuous_inputs": False}),
         }
 
 

@@ -68,6 +68,7 @@ def problem_from(data: Mapping[str, Any]) -> GaitProblem:
         min_crossing_rate=float(data["min_crossing_rate"]),
         clearance=float(data.get("clearance", 0.0)),
         guard_margin=float(data.get("guard_margin", 0.0)),
+        continuous_inputs=bool(data.get("continuous_inputs", True)),
     )
 
 
