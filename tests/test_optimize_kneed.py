@@ -67,7 +67,7 @@ def test_kneed_multipliers_ad_are_the_limit_of_finite_differences(gait):
     # O(h⁴): measured 9e-4 at h = 1e-3 and 9e-5 at h = 1e-4 (entries up to 5.8), with rounding
     # below 1e-6 (the simulation's return error ~4e-11 over h).  So the gap must shrink about
     # tenfold with h (between 5× and 20×) and be below 2e-4 at h = 1e-4, and the moduli of the
-    # multipliers must agree to 1e-5 there (a few 1e-7 measured).
+    # multipliers must agree to 1e-5 there (2.4e-6 and 1.5e-7 measured).
     from gaitopt.optimize.floquet import multipliers_of, return_map_jacobian
     from gaitopt.optimize.verify import profiles, simulate_gait
 
