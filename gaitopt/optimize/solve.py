@@ -12,7 +12,8 @@ with ``success=False`` naming the constraint that cannot be met.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import fields
 from typing import Any
 
 import casadi as ca
@@ -42,7 +43,10 @@ _IPOPT = {
     "error_on_fail": False,
     "expand": True,
 }
-_SOLVERS: dict[int, tuple[Collocation, ca.Function]] = {}
+#: Transcriptions kept with their compiled NLPs, by statement and mesh (least recently used
+#: dropped first): each holds a compiled NLP of a few MB.
+_COLLOCATIONS: dict[tuple, Collocation] = {}
+_CACHED_TRANSCRIPTIONS = 4
 _MAX_REFINEMENTS = 3
 
 
@@ -151,13 +155,44 @@ def _start_indices(starts: int | Sequence[int]) -> list[int]:
     return indices
 
 
+def _statement_key(problem: GaitProblem) -> tuple:
+    """Everything a transcription depends on: each field of the statement (the model by class
+    and parameter values; a user's cost function by identity, so a new one never hits)."""
+    items = []
+    for f in fields(problem):
+        value = getattr(problem, f.name)
+        if f.name == "model":
+            value = (type(value), tuple(value.params.items()))
+        elif callable(value):
+            value = ("callable", id(value))
+        elif isinstance(value, Mapping):
+            value = tuple(sorted((k, repr(v)) for k, v in value.items()))
+        items.append((f.name, value))
+    return tuple(items)
+
+
+def _collocation(
+    problem: GaitProblem, mesh: RadauMesh, structure: list[list[Arc]] | None = None
+) -> Collocation:
+    """The transcription of a statement on a mesh, from a small cache: a repeated solve of the
+    same statement (a second call, the points a library revisits) reuses the transcription and
+    its compiled NLP (``nlpsol`` takes about 0.25 s to build for the compass gait)."""
+    key = (_statement_key(problem), mesh, repr(structure))
+    col = _COLLOCATIONS.pop(key, None)
+    if col is None:
+        col = Collocation(problem, mesh, structure)
+    _COLLOCATIONS[key] = col  # most recently used last
+    while len(_COLLOCATIONS) > _CACHED_TRANSCRIPTIONS:
+        _COLLOCATIONS.pop(next(iter(_COLLOCATIONS)))
+    return col
+
+
 def _solver(col: Collocation) -> ca.Function:
-    key = id(col)
-    entry = _SOLVERS.get(key)
-    if entry is None or entry[0] is not col:  # an id may be reused once its object is freed
-        _SOLVERS.clear()  # one at a time: each holds a compiled NLP
-        _SOLVERS[key] = (col, ca.nlpsol("gait", "ipopt", col.nlp, _IPOPT))
-    return _SOLVERS[key][1]
+    """IPOPT on the transcription's NLP, built once per transcription (kept with it)."""
+    solver = col.__dict__.get("_ipopt")
+    if solver is None:
+        solver = col.__dict__["_ipopt"] = ca.nlpsol("gait", "ipopt", col.nlp, _IPOPT)
+    return solver
 
 
 def _run(col: Collocation, w0: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, dict[str, Any]]:
@@ -211,7 +246,7 @@ def solve_problem(
     model = problem.model
     p = model.p
     mesh = mesh or DEFAULT_MESH
-    col = Collocation(problem, mesh)
+    col = _collocation(problem, mesh)
     indices = _start_indices(starts)
     if scheduler is not None:  # the same attempts, on Dask workers
         from .library import dask_starts
@@ -260,7 +295,7 @@ def solve_problem(
         # Second stage: the exact switching-time transcription with the arcs of the slack
         # solution (its quadrature of max(0, uω) is first order across the switches).
         structure = detect_structure(col, w, p)
-        exact = Collocation(
+        exact = _collocation(
             problem,
             RadauMesh(sum(a.intervals for a in structure[0]), col.d),
             structure,
@@ -345,8 +380,8 @@ def solve_problem(
 def _refined(col: Collocation) -> Collocation:
     """The same transcription with every mesh interval halved (each arc's too)."""
     if col.structure is None:
-        return Collocation(col.problem, col.mesh.refined())
+        return _collocation(col.problem, col.mesh.refined())
     structure = [
         [Arc(2 * a.intervals, a.signs, a.fraction) for a in arcs] for arcs in col.structure
     ]
-    return Collocation(col.problem, col.mesh.refined(), structure)
+    return _collocation(col.problem, col.mesh.refined(), structure)
