@@ -22,9 +22,9 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from gaitopt.hybrid import rate_along
 from gaitopt.models import model as make_model
 from gaitopt.optimize import optimize_gait
-from gaitopt.hybrid import rate_along
 from gaitopt.optimize.problem import GaitProblem
 
 __all__ = ["run", "hermite_simpson_compass", "table"]
