@@ -314,10 +314,12 @@ class Collocation:
 
         period = ca.sum1(ca.vertcat(*T))
         total = ca.sum1(ca.vertcat(*distance)) if distance else ca.MX(0)
+        # The fixed period and step length are the bounds of their rows, not constants in the
+        # graph: problems that differ only in them (a library's points) share one compiled NLP.
         if problem.period is not None:
-            add("period", period - problem.period)
+            add("period", period, problem.period, problem.period)
         if problem.step_length is not None:
-            add("step length", total / problem.steps - problem.step_length)
+            add("step length", total / problem.steps, problem.step_length, problem.step_length)
         if problem.speed is not None:
             add("speed", total - problem.speed * period)
         if work:

@@ -46,6 +46,7 @@ _IPOPT = {
 #: Transcriptions kept with their compiled NLPs, by statement and mesh (least recently used
 #: dropped first): each holds a compiled NLP of a few MB.
 _COLLOCATIONS: dict[tuple, Collocation] = {}
+_SOLVERS: dict[tuple, ca.Function] = {}
 _CACHED_TRANSCRIPTIONS = 4
 _MAX_REFINEMENTS = 3
 
@@ -155,14 +156,18 @@ def _start_indices(starts: int | Sequence[int]) -> list[int]:
     return indices
 
 
-def _statement_key(problem: GaitProblem) -> tuple:
+def _statement_key(problem: GaitProblem, values: bool = True) -> tuple:
     """Everything a transcription depends on: each field of the statement (the model by class
-    and parameter values; a user's cost function by identity, so a new one never hits)."""
+    and parameter values; a user's cost function by identity, so a new one never hits).  With
+    ``values=False``, only whether the period and step length are fixed, not their values: they
+    are bounds of the NLP's rows, so such statements share a compiled NLP."""
     items = []
     for f in fields(problem):
         value = getattr(problem, f.name)
         if f.name == "model":
             value = (type(value), tuple(value.params.items()))
+        elif not values and f.name in ("period", "step_length"):
+            value = value is not None
         elif callable(value):
             value = ("callable", id(value))
         elif isinstance(value, Mapping):
@@ -188,10 +193,16 @@ def _collocation(
 
 
 def _solver(col: Collocation) -> ca.Function:
-    """IPOPT on the transcription's NLP, built once per transcription (kept with it)."""
-    solver = col.__dict__.get("_ipopt")
+    """IPOPT on the transcription's NLP, built once per NLP structure: transcriptions of
+    statements that differ only in the fixed period or step length share it (their values are
+    the bounds ``lbg = ubg`` of their rows, passed with each solve)."""
+    key = (_statement_key(col.problem, values=False), col.mesh, repr(col.structure))
+    solver = _SOLVERS.pop(key, None)
     if solver is None:
-        solver = col.__dict__["_ipopt"] = ca.nlpsol("gait", "ipopt", col.nlp, _IPOPT)
+        solver = ca.nlpsol("gait", "ipopt", col.nlp, _IPOPT)
+    _SOLVERS[key] = solver  # most recently used last
+    while len(_SOLVERS) > _CACHED_TRANSCRIPTIONS:
+        _SOLVERS.pop(next(iter(_SOLVERS)))
     return solver
 
 
