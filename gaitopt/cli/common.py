@@ -321,6 +321,21 @@ def _print_rows(rows: Iterable[tuple[str, Any]]) -> None:
         print(f"{label:<12}{value}")
 
 
+def print_header(result: Any, *rows: tuple[str, Any]) -> None:
+    """The first lines of a result as text: its model and parameters, any ``rows``, then
+    ``success`` and ``message`` (a gait, a branch, a curve)."""
+    model = result.model
+    _print_rows(
+        [
+            ("model", f"{model.name} ({model.title})"),
+            ("params", _format_params(model.params)),
+            *rows,
+            ("success", result.success),
+            ("message", result.message),
+        ]
+    )
+
+
 def _model_arguments(parser: argparse.ArgumentParser) -> None:
     """``MODEL`` and ``--set``, shared by the subcommands that act on one model."""
     parser.add_argument("model", metavar="MODEL", help=f"model name (see `{PROG} list`)")

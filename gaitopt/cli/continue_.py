@@ -22,15 +22,14 @@ from .common import (
     InputError,
     _count,
     _echo,
-    _format_params,
     _gait_arguments,
     _model_arguments,
     _number,
     _print_json,
-    _print_rows,
     _solver_output_to_stderr,
     build_model,
     parse_guess,
+    print_header,
     write_outputs,
     write_result,
 )
@@ -123,15 +122,7 @@ def _write_branch(branch: Branch, folder: Path) -> None:
 
 
 def _print_branch(branch: Branch) -> None:
-    model = branch.model
-    _print_rows(
-        [
-            ("model", f"{model.name} ({model.title})"),
-            ("params", _format_params(model.params)),
-            ("success", branch.success),
-            ("message", branch.message),
-        ]
-    )
+    print_header(branch)
     for sub in branch.descendants():
         if not sub.cycles:
             continue

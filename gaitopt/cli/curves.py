@@ -26,13 +26,12 @@ from .common import (
     EXIT_OK,
     InputError,
     _echo,
-    _format_params,
     _number,
     _print_json,
-    _print_rows,
     _solver_output_to_stderr,
     build_model,
     parse_guess,
+    print_header,
     write_result,
 )
 
@@ -145,17 +144,7 @@ def write_curve(curve: Curve, folder: Path) -> None:
 
 def print_curve(curve: Curve) -> None:
     """The curve as text: a header, the points, the special points."""
-    model = curve.model
-    _print_rows(
-        [
-            ("model", f"{model.name} ({model.title})"),
-            ("params", _format_params(model.params)),
-            ("kind", curve.kind),
-            ("condition", curve.condition),
-            ("success", curve.success),
-            ("message", curve.message),
-        ]
-    )
+    print_header(curve, ("kind", curve.kind), ("condition", curve.condition))
     if curve.start is not None:
         print(f"start       {curve.start.kind} at {curve.param} = {curve.start.param:.10f}")
     if curve.cycles:

@@ -15,7 +15,6 @@ from .common import (
     InputError,
     _count,
     _echo,
-    _format_params,
     _gait_arguments,
     _model_arguments,
     _print_json,
@@ -24,6 +23,7 @@ from .common import (
     _solver_output_to_stderr,
     build_model,
     parse_guess,
+    print_header,
 )
 
 
@@ -58,14 +58,7 @@ def _solve_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _print_cycle(cycle: LimitCycle) -> None:
     model = cycle.model
-    _print_rows(
-        [
-            ("model", f"{model.name} ({model.title})"),
-            ("params", _format_params(model.params)),
-            ("success", cycle.success),
-            ("message", cycle.message),
-        ]
-    )
+    print_header(cycle)
     if not cycle.success:
         return
     _print_rows([("period", f"{cycle.period:.10g} ({cycle.steps} step(s) per orbit)")])
