@@ -314,14 +314,17 @@ class Collocation:
 
         period = ca.sum1(ca.vertcat(*T))
         total = ca.sum1(ca.vertcat(*distance)) if distance else ca.MX(0)
-        # The fixed period and step length are the bounds of their rows, not constants in the
-        # graph: problems that differ only in them (a library's points) share one compiled NLP.
+        # The fixed period, step length and speed are the bounds of their rows, not constants in
+        # the graph: problems that differ only in them (a library's points) share one compiled
+        # NLP.  The speed row is distance / period (the period is a sum of durations bounded
+        # away from 0); with the period and step length both fixed it is implied (the statement
+        # checks they agree) and left out, so the rows stay independent.
         if problem.period is not None:
             add("period", period, problem.period, problem.period)
         if problem.step_length is not None:
             add("step length", total / problem.steps, problem.step_length, problem.step_length)
-        if problem.speed is not None:
-            add("speed", total - problem.speed * period)
+        if problem.speed is not None and (problem.period is None or problem.step_length is None):
+            add("speed", total / period, problem.speed, problem.speed)
         if work:
             positive_work = ca.sum1(ca.vertcat(*work_terms))
             if problem.cost_kind == "cot":

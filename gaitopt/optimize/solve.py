@@ -163,14 +163,14 @@ def _start_indices(starts: int | Sequence[int]) -> list[int]:
 def _statement_key(problem: GaitProblem, values: bool = True) -> tuple:
     """Everything a transcription depends on: each field of the statement (the model by class
     and parameter values; a user's cost function by identity, so a new one never hits).  With
-    ``values=False``, only whether the period and step length are fixed, not their values: they
-    are bounds of the NLP's rows, so such statements share a compiled NLP."""
+    ``values=False``, only whether the period, step length and speed are fixed, not their
+    values: they are bounds of the NLP's rows, so such statements share a compiled NLP."""
     items = []
     for f in fields(problem):
         value = getattr(problem, f.name)
         if f.name == "model":
             value = (type(value), tuple(value.params.items()))
-        elif not values and f.name in ("period", "step_length"):
+        elif not values and f.name in ("period", "step_length", "speed"):
             value = value is not None
         elif callable(value):
             value = ("callable", id(value))
@@ -198,7 +198,7 @@ def _collocation(
 
 def _solver(col: Collocation) -> ca.Function:
     """IPOPT on the transcription's NLP, built once per NLP structure: transcriptions of
-    statements that differ only in the fixed period or step length share it (their values are
+    statements that differ only in the fixed period, step length or speed share it (their values are
     the bounds ``lbg = ubg`` of their rows, passed with each solve)."""
     key = (_statement_key(col.problem, values=False), col.mesh, repr(col.structure))
     solver = _SOLVERS.pop(key, None)
