@@ -88,3 +88,20 @@ def test_bench_record_and_table(tmp_path):
     assert data["machine"]["cpu_count"] >= 1 and data["drake"]["available"] is False
     text = bench.format_table(record)
     assert "solve_ivp + fsolve" in text and "rimless_wheel" in text
+
+
+def test_optimal_gait_baseline_reaches_the_compass_optimum():
+    # The hand-written Hermite–Simpson transcription (bench/optimize.py) against gaitopt's refined
+    # optimum 6.668848535 N²·m²·s (README; discretisation error 1.5e-10): on 40 intervals its own
+    # O(h⁴) error is 2e-6 relative (6.66886156), so 1e-5; halving h must cut the gap by ~16.
+    from bench.optimize import hermite_simpson
+
+    model = gaitopt.model("compass_gait", slope=0.0)
+    swap = lambda x: x[[1, 0, 2, 3]]  # noqa: E731 — (stance, swing, rates): legs exchanged
+    coarse = hermite_simpson(model, 0.8, 0.3, 40, end=swap)
+    fine = hermite_simpson(model, 0.8, 0.3, 80, end=swap)
+    reference = 6.668848535
+    assert coarse["status"] == "Solve_Succeeded" and fine["status"] == "Solve_Succeeded"
+    assert abs(coarse["cost"] - reference) <= 1e-5 * reference
+    ratio = abs(coarse["cost"] - reference) / abs(fine["cost"] - reference)
+    assert 10 < ratio < 24  # fourth order: 2⁴ = 16
