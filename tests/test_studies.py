@@ -212,3 +212,32 @@ def test_basin_of_attraction_contains_the_gait_and_is_small(goswami):
     assert total == pytest.approx(1.0, abs=1e-12)
     assert not list(goswami.glob("*.jsonl"))
     assert (goswami / "stability_map.png").stat().st_size > 0
+
+
+# -- compass gait on a slope: the optimum at the passive step is the passive gait ---------------
+@pytest.fixture(scope="module")
+def compass_slope(tmp_path_factory):
+    return _run("optimal_compass_slope", tmp_path_factory.mktemp("studies"))
+
+
+def test_least_effort_at_the_passive_step_is_the_passive_gait(compass_slope):
+    # Two independent transcriptions: multiple shooting's passive gait (discretisation error
+    # ≤ 1e-10) and the least-effort collocation at its period and step length (refined to 1e-8).
+    # Zero effort to the refinement target (1e-8 N²·m²·s); same fixed point and multipliers
+    # to 1e-6 (the optimiser's tolerance on the orbit, well above both transcriptions' errors).
+    summary = _load(compass_slope, "summary.json")
+    assert summary["optimum_at_passive"]["success"]
+    assert summary["effort_at_passive"] <= 1e-8
+    assert summary["fixed_point_difference"] <= 1e-6
+    assert summary["multiplier_difference"] <= 1e-6
+
+
+def test_least_effort_rises_quadratically_away_from_the_passive_period(compass_slope):
+    # A smooth minimum at a gait that needs no torque: effort ∝ (T − T*)² to leading order, so
+    # effort / (T − T*)² is about the same at ±5 % and ±10 % of T* (a linear rise would halve
+    # it from 10 % to 5 %: ratio 2); the library is certified and agrees with cold starts.
+    summary = _load(compass_slope, "summary.json")
+    assert summary["library"]["success"]
+    ratios = summary["effort_over_squared_period_offset"]
+    assert len(ratios) >= 4 and min(ratios) > 0
+    assert max(ratios) / min(ratios) < 1.5
