@@ -1,74 +1,102 @@
-"""The arcs of a work-based cost: where each input's power changes sign on the first (slack)
-solution, with short blips merged, as the switching-time transcription's structure
-(:class:`gaitopt.optimize.collocation.Arc`)."""
+"""The arcs of a work-based cost read off the first (slack) solution, as the switching-time
+transcription's structure (:class:`gaitopt.optimize.collocation.Arc`): per input, where its
+power is positive or negative (and whether it sits at a bound there), where it coasts
+(``u ≡ 0``) and where it holds its joint (``ω ≡ 0``, ``u ≠ 0``); the nodes of a switch caught
+inside a mesh interval are shared out between their neighbours."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from .collocation import Arc, Collocation
+from .radau import COAST, HELD, NEGATIVE, POSITIVE
 
 #: Mesh intervals per arc of the switching-time transcription, before refinement.
 ARC_INTERVALS = 2
 
 
+_SYMBOLS = {POSITIVE: "+", NEGATIVE: "-", COAST: "coast", HELD: "held"}
+
+
 def _describe(structure: list[list[Arc]]) -> str:
-    """``+ − +`` per phase (per input, joined by ``/``)."""
+    """``+lo coast held -lo +lo`` per phase (per input, joined by ``/``; ``lo``, ``hi``: at its
+    lower or upper bound)."""
     phases = []
     for arcs in structure:
-        phases.append(" ".join("/".join("+" if s > 0 else "-" for s in a.signs) for a in arcs))
+        words = []
+        for a in arcs:
+            bounds = a.bounds or (0,) * len(a.signs)
+            words.append(
+                "/".join(
+                    _SYMBOLS[s] + ("lo" if b < 0 else "hi" if b > 0 else "")
+                    for s, b in zip(a.signs, bounds, strict=True)
+                )
+            )
+        phases.append(" ".join(words))
     return "; ".join(f"[{p}]" for p in phases)
 
 
 def detect_structure(
     col: Collocation, w: np.ndarray, p: np.ndarray, intervals: int = ARC_INTERVALS
 ) -> list[list[Arc]]:
-    """Arcs of a slack solution: maximal runs of nodes on which every input keeps its class,
+    """Arcs of a slack solution: maximal runs of nodes on which every input keeps its kind,
     the switch put halfway between the last node of a run and the first of the next.
 
-    An input's class at a node is its bound (lower, upper, neither) with its power sign
-    (``+``: ``uω > δ``, ``−``: ``uω < −δ``), or for a power within ``δ`` (10⁻⁶ of the largest)
-    whether the input vanishes (``u ≈ 0``, a coasting arc) or the rate does (``ω ≈ 0``, a
-    held joint): the input may jump wherever the class changes.  An arc's sign is ``+`` if its
-    power is positive, else ``−`` (power ≤ 0, not counted).
+    An input's kind at a node: coasting (:data:`~gaitopt.optimize.radau.COAST`) where it is
+    within 10⁻⁴ of its range of zero (or at a bound of 0), else a held joint
+    (:data:`~gaitopt.optimize.radau.HELD`) where its rate is within 10⁻⁴ of its largest of
+    zero, else its power sign, with the bound it sits at (within 10⁻⁴ of its range).  A run of
+    at most :data:`BLIP_NODES` nodes inside a phase with no input at a bound is a switch
+    falling inside a mesh interval (its nodes see the mixture), not an arc: its neighbours
+    share it.  An input whose rate vanishes identically in a phase is ``−``.
 
     Returns, per phase of the orbit, its arcs with ``intervals`` mesh intervals each (a phase
     with fewer arcs than another gives its longest arcs the spare intervals, so that every
     phase has the same count)."""
     sol = col.unpack(w, p)
-    problem, model = col.problem, col.model
-    low, high = problem.input_bounds()
+    model = col.model
+    low, high = col.problem.input_bounds()
     per_phase = []
     for k, i in enumerate(col.chain):
         X, U = sol["X"][k][:, 1:], sol["U"][k]
         rates = np.asarray(model.input_rates(i).map(X.shape[1])(X, sol["p"]), dtype=float)
         power = U * rates
-        scale = 1e-6 * (np.max(np.abs(power), axis=1, keepdims=True) + 1e-12)
-        u_scale = 1e-6 * (np.max(np.abs(U), axis=1, keepdims=True) + 1e-12)
-        # Power class: +1 positive, -1 negative, 0 input ≈ 0, 2 rate ≈ 0 (input held).
+        # Small is 1e-4 of the input's range (its bounds, else its largest value) or of the
+        # rate's largest value: the slack solution leaves an input wandering by ~1e-7 of its
+        # range where the cost is flat.
+        finite = np.isfinite(low) & np.isfinite(high)
+        largest = np.max(np.abs(U), axis=1) + 1e-12
+        span = np.where(finite, np.where(finite, high - low, 0.0), largest)[:, None]
+        u_small = np.abs(U) <= 1e-4 * span
+        w_small = np.abs(rates) <= 1e-4 * (np.max(np.abs(rates), axis=1, keepdims=True) + 1e-12)
         kind = np.where(
-            power > scale, 1, np.where(power < -scale, -1, np.where(np.abs(U) <= u_scale, 0, 2))
+            u_small, COAST, np.where(w_small, HELD, np.where(power > 0, POSITIVE, NEGATIVE))
         )
-        span = np.where(np.isfinite(high), high - low, 1.0)[:, None]
         bound = np.where(
             U <= low[:, None] + 1e-4 * span, -1, np.where(U >= high[:, None] - 1e-4 * span, 1, 0)
         )
-        classes = [tuple(kind[:, c]) + tuple(bound[:, c]) for c in range(U.shape[1])]
-        n_u = U.shape[0]
-
-        def signs(cls: tuple[int, ...], n_u: int = n_u) -> tuple[int, ...]:
-            return tuple(1 if v == 1 else -1 for v in cls[:n_u])
-
+        bound[~np.isin(kind, (POSITIVE, NEGATIVE))] = 0
+        # At a bound of 0 (a one-sided input) the input vanishes: it coasts.
+        at_zero = ((bound < 0) & (low[:, None] == 0)) | ((bound > 0) & (high[:, None] == 0))
+        kind[at_zero], bound[at_zero] = COAST, 0
+        idle = col._idle_inputs(i)
+        kind[idle, :], bound[idle, :] = NEGATIVE, 0
         times = col.node_times(sol["breaks"][k])[1:]
+        runs: list[list] = []  # [first node, last node, (kinds, bounds)]
+        for c in range(kind.shape[1]):
+            signs = (tuple(int(v) for v in kind[:, c]), tuple(int(v) for v in bound[:, c]))
+            if runs and runs[-1][2] == signs:
+                runs[-1][1] = c
+            else:
+                runs.append([c, c, signs])
+        runs = _absorb_switches(runs)
         arcs, start = [], 0.0
-        current = classes[0]
-        for c in range(1, len(classes)):
-            if classes[c] != current:
-                switch = 0.5 * (times[c - 1] + times[c])
-                arcs.append((switch - start, signs(current)))
-                start, current = switch, classes[c]
-        arcs.append((1.0 - start, signs(current)))
-        per_phase.append(_merge_blips(arcs, 1.0 / col.N))
+        for a, b in zip(runs[:-1], runs[1:], strict=True):
+            switch = 0.5 * (times[a[1]] + times[b[0]])
+            arcs.append((switch - start, a[2]))
+            start = switch
+        arcs.append((1.0 - start, runs[-1][2]))
+        per_phase.append(_merge_blips(arcs, 0.5 / col.N))
     most = max(len(a) for a in per_phase)
     total = intervals * most
     structure = []
@@ -78,9 +106,39 @@ def detect_structure(
         for extra in range(total - sum(counts)):
             counts[int(order[extra % len(arcs)])] += 1
         structure.append(
-            [Arc(n, signs, max(f, 1e-3)) for n, (f, signs) in zip(counts, arcs, strict=True)]
+            [
+                Arc(n, kinds, max(f, 1e-3), bounds if any(bounds) else ())
+                for n, (f, (kinds, bounds)) in zip(counts, arcs, strict=True)
+            ]
         )
     return structure
+
+
+#: Runs of at most this many nodes inside a phase are switches, not arcs.
+BLIP_NODES = 2
+
+
+def _absorb_switches(runs: list[list]) -> list[list]:
+    """Runs without the nodes of a switch: an inner run of at most :data:`BLIP_NODES` nodes
+    with no input at a bound (a rate or an input passing through zero where the power changes
+    sign, an input caught between its bound and zero where it jumps) is split between its
+    neighbours (joined if they are alike), shortest first.  Short bang runs are kept."""
+    runs = [list(r) for r in runs]
+    while True:
+        inner = [
+            j
+            for j in range(1, len(runs) - 1)
+            if runs[j][1] - runs[j][0] + 1 <= BLIP_NODES and not any(runs[j][2][1])
+        ]
+        if not inner:
+            return runs
+        j = min(inner, key=lambda j: runs[j][1] - runs[j][0])
+        before, blip, after = runs[j - 1], runs[j], runs[j + 1]
+        if before[2] == after[2]:
+            runs[j - 1 : j + 2] = [[before[0], after[1], before[2]]]
+        else:
+            middle = (blip[0] + blip[1]) // 2  # the first half (with the middle) goes before
+            runs[j - 1 : j + 2] = [[before[0], middle, before[2]], [middle + 1, after[1], after[2]]]
 
 
 def _merge_blips(

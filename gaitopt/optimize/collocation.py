@@ -14,10 +14,14 @@ Work-based costs are transcribed in two ways.  Without a ``structure``, with sla
 ``pᵢ⁺ − pᵢ⁻ = uᵢωᵢ`` at the nodes: robust, but the quadrature of ``max(0, uᵢωᵢ)`` is only first
 order where the power changes sign or the input jumps inside a mesh interval.  With a
 ``structure`` (an :class:`Arc` sequence per phase, found from that first solution), each phase is
-cut into arcs whose durations are decision variables; on each arc every input's power has a
-declared sign, ``σ uᵢωᵢ ≥ 0`` at the arc's nodes and its start, and the running cost is
-``Σ_{σ=+} uᵢωᵢ`` — a smooth integrand on each arc, so the quadrature keeps the collocation
-order and the cost is exactly the positive work of the profile (checked by simulation).  The
+cut into arcs whose durations are decision variables; on each arc every input has a declared
+kind: a power sign, ``σ uᵢωᵢ ≥ 0`` at the arc's nodes, midpoints and start (the input fixed at
+its bound on a bang arc), coasting (``uᵢ = 0`` at the arc's points, so the input polynomial
+vanishes) or a held joint (``ωᵢ(x) = 0`` at the arc's start and points: a rate linear in the
+state is then the zero polynomial on each interval, while ``uᵢ ≠ 0`` holds the joint).  The
+running cost is ``Σ_{σ=+} uᵢωᵢ`` — a smooth integrand on each arc, and every jump of an input
+falls on an arc boundary, so the quadrature keeps the collocation order and the cost is the
+positive work of the profile (the compass gait's: to 3e-11 of its simulation).  The
 switching times are where the optimum puts them (Betts 2010, "Practical Methods for Optimal
 Control", §4.7, phases at the switches of bang-bang and singular arcs).
 
@@ -38,7 +42,18 @@ import numpy as np
 from ..errors import GaitoptInputError
 from ..hybrid import rate_along
 from .problem import GaitProblem
-from .radau import Arc, Group, RadauMesh, _Blocks, _derivative_matrix, lagrange_matrix
+from .radau import (
+    COAST,
+    HELD,
+    NEGATIVE,
+    POSITIVE,
+    Arc,
+    Group,
+    RadauMesh,
+    _Blocks,
+    _derivative_matrix,
+    lagrange_matrix,
+)
 
 __all__ = ["RadauMesh", "Collocation", "lagrange_matrix", "Group", "Arc"]
 
@@ -278,19 +293,39 @@ class Collocation:
                 work_terms.append(hq * ca.mtimes(ca.sum1(Pp[k]), wq))
                 work_terms.append(problem.impulse_work(i, x_end, u_end, p))
                 effort_terms.append(hq * ca.mtimes(ca.sum1(Uk**2), wq))
-            elif work:  # signed arcs: σ uᵢωᵢ ≥ 0 on each arc, cost Σ_{σ=+} uᵢωᵢ (exact)
+            elif work:  # arcs: σ uᵢωᵢ ≥ 0 (σ = ±1), u ≡ 0 or ω ≡ 0; cost Σ_{σ=+} uᵢωᵢ (exact)
                 rate_fn = model.input_rates(i)
-                power = Uk * rate_fn.map(N * d)(Xc, p)
-                signs = np.array(
-                    [arc.signs for arc in structure[k] for _ in range(arc.intervals)], dtype=float
+                rates = rate_fn.map(N * d)(Xc, p)
+                power = Uk * rates
+                kinds = np.array(
+                    [arc.signs for arc in structure[k] for _ in range(arc.intervals)], dtype=int
                 ).T  # n_u × N
-                sigma = ca.DM(np.repeat(signs, d, axis=1))
-                add(f"power sign ({label})", sigma * power, 0.0, np.inf)
+                # An input whose rate vanishes identically in this phase (the locked knee's)
+                # does no work: it needs no arc constraint.
+                kinds[self._idle_inputs(i), :] = NEGATIVE
+                node_kinds = np.repeat(kinds, d, axis=1)  # n_u × N·d
+                signed = np.isin(kinds, (POSITIVE, NEGATIVE))
+                signed[self._idle_inputs(i), :] = False
+                # Bang and coasting arcs fix the input at the arc's points (its bound, or 0):
+                # fixed variables, which IPOPT removes from the problem.
+                bangs = np.array(
+                    [a.bounds or (0,) * n_u for a in structure[k] for _ in range(a.intervals)],
+                    dtype=int,
+                ).T  # n_u × N
+                bangs[~signed] = 0
+                fixed = np.where(bangs > 0, uhi[:, None], np.where(bangs < 0, ulo[:, None], np.nan))
+                fixed[kinds == COAST] = 0.0
+                fixed[self._idle_inputs(i), :] = np.nan
+                slot = B.names.index(f"U{k}")
+                values = np.repeat(fixed, d, axis=1).ravel(order="F")
+                keep = np.isnan(values)
+                B.lb[slot] = np.where(keep, B.lb[slot], values)
+                B.ub[slot] = np.where(keep, B.ub[slot], values)
                 u0 = ca.DM(self.u_at_start)
                 starts_u = ca.horzcat(*[ca.mtimes(Uk[:, j * d : j * d + d], u0) for j in range(N)])
                 starts_x = ca.horzcat(*[Xk[:, j * d] for j in range(N)])
-                start_power = starts_u * rate_fn.map(N)(starts_x, p)
-                add(f"power sign at arc starts ({label})", ca.DM(signs) * start_power, 0.0, np.inf)
+                start_rates = rate_fn.map(N)(starts_x, p)
+                start_power = starts_u * start_rates
                 # Between the nodes too (the midpoints): the profile the simulator applies is
                 # the polynomial, whose power must keep its arc's sign and whose value must
                 # keep its bounds there as well.
@@ -300,12 +335,44 @@ class Collocation:
                 xs = ca.horzcat(*[ca.mtimes(Xk[:, j * d : j * d + d + 1], Lx) for j in range(N)])
                 us = ca.horzcat(*[ca.mtimes(Uk[:, j * d : (j + 1) * d], Lu) for j in range(N)])
                 mid_power = us * rate_fn.map(N * d)(xs, p)
-                add(f"power sign between nodes ({label})", sigma * mid_power, 0.0, np.inf)
+                sign_rows, start_rows, mid_rows, held_rows = [], [], [], []
                 for r in range(n_u):
-                    if np.isfinite(uhi[r]):
+                    nodes = [c for c in range(N * d) if signed[r, c // d]]
+                    if nodes:
+                        sigma = ca.DM(node_kinds[r, nodes].astype(float)).T
+                        sign_rows.append(sigma * power[r, nodes])
+                        mid_rows.append(sigma * mid_power[r, nodes])
+                    ivals = [j for j in range(N) if signed[r, j]]
+                    if ivals:
+                        sigma = ca.DM(kinds[r, ivals].astype(float)).T
+                        start_rows.append(sigma * start_power[r, ivals])
+                    # A held joint: ω = 0 at the collocation points of the arc's intervals and
+                    # at the arc's start (the other interval starts are the previous
+                    # interval's last point): ω(x(τ)) ≡ 0 on the arc.
+                    held = [c for c in range(N * d) if kinds[r, c // d] == HELD]
+                    entries = [j for j in range(N) if kinds[r, j] == HELD]
+                    entries = [j for j in entries if j == 0 or kinds[r, j - 1] != HELD]
+                    if held:
+                        held_rows.append(rates[r, held])
+                        held_rows.append(start_rates[r, entries])
+                for name, rows, low in (
+                    ("power sign", sign_rows, 0.0),
+                    ("power sign at arc starts", start_rows, 0.0),
+                    ("power sign between nodes", mid_rows, 0.0),
+                    ("held joint (rate zero)", held_rows, None),
+                ):
+                    if rows:
+                        expr = ca.horzcat(*rows)
+                        if low is None:
+                            add(f"{name} ({label})", expr)
+                        else:
+                            add(f"{name} ({label})", expr, low, np.inf)
+                for r in range(n_u):
+                    free_nodes = [c for c in range(N * d) if np.isnan(fixed[r, c // d])]
+                    if np.isfinite(uhi[r]) and free_nodes:
                         name = f"|{model.inputs[r]}| between nodes ({label})"
-                        add(name, us[r, :], ulo[r], uhi[r])
-                positive = ca.DM(np.repeat((signs > 0).astype(float), d, axis=1))
+                        add(name, us[r, free_nodes], ulo[r], uhi[r])
+                positive = ca.DM((node_kinds == POSITIVE).astype(float))
                 work_terms.append(ca.mtimes(ca.sum1(positive * power), wq))
                 work_terms.append(problem.impulse_work(i, x_end, u_end, p))
             else:
@@ -355,6 +422,14 @@ class Collocation:
         }
         self._X, self._U, self._T = X, U, T
         self._theta = Th
+
+    def _idle_inputs(self, phase: int) -> list[int]:
+        """Inputs whose rate (:meth:`~gaitopt.HybridModel.input_rates`) is identically zero in
+        ``phase``: they do no work there (the kneed walker's knee torque once the knee locks)."""
+        fn = self.model.input_rates(phase)
+        x = ca.SX.sym("x", fn.size1_in(0))
+        rates = fn(x, ca.SX.sym("p", fn.size1_in(1)))
+        return [r for r in range(rates.shape[0]) if rates[r].is_zero()]
 
     def _clearance_margin(self, T: list[ca.MX], hs: list[Any], k: int) -> tuple[Any, Any]:
         """The clearance margin ``c · sin(π t / T_step)`` (m) at the collocation nodes of phase

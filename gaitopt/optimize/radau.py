@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import GaitoptInputError
 
-__all__ = ["Arc", "Group", "RadauMesh", "lagrange_matrix"]
+__all__ = ["Arc", "COAST", "Group", "HELD", "NEGATIVE", "POSITIVE", "RadauMesh", "lagrange_matrix"]
 
 
 @dataclass(frozen=True)
@@ -58,6 +58,10 @@ def _derivative_matrix(nodes: np.ndarray, points: np.ndarray) -> np.ndarray:
     return D
 
 
+#: Kinds of an input on an :class:`Arc` (its ``signs``).
+POSITIVE, NEGATIVE, COAST, HELD = 1, -1, 0, 2
+
+
 @dataclass(frozen=True)
 class Arc:
     """An arc of a phase in the switching-time transcription of a work-based cost.
@@ -67,14 +71,27 @@ class Arc:
     intervals : int
         Mesh intervals on the arc (equal lengths).
     signs : tuple of int
-        Per input, ``+1`` (positive power, counted in the cost) or ``−1`` (power ≤ 0, free).
+        Per input, ``+1`` (:data:`POSITIVE`: power ≥ 0, counted in the cost), ``−1``
+        (:data:`NEGATIVE`: power ≤ 0, not counted), ``0`` (:data:`COAST`: the input vanishes,
+        ``u ≡ 0``) or ``2`` (:data:`HELD`: its joint is held, ``ω ≡ 0`` while ``u ≠ 0``).  On a
+        coasting or held arc the power is exactly zero: the transcription imposes ``u = 0`` at
+        the arc's collocation points (the degree-``d − 1`` input polynomial then vanishes), or
+        ``ω(x) = 0`` at its start and collocation points (for a rate linear in the state, the
+        degree-``d`` polynomial ``ω(x(τ))`` vanishes at ``d + 1`` points of each interval, so
+        everywhere); a sign alone would leave a held joint free to creep both ways between the
+        nodes, and a coasting input free wherever the cost is flat.
     fraction : float
         Initial guess of the arc's share of the phase duration (1).
+    bounds : tuple of int
+        Per input on an arc of a power sign, ``+1`` or ``−1`` if it stays at its upper or lower
+        bound over the arc (a bang arc: the input is fixed there, so where it leaves the bound
+        is a switching time, not a jump inside a mesh interval), else 0; empty: none.
     """
 
     intervals: int
     signs: tuple[int, ...]
     fraction: float
+    bounds: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import fields
+from dataclasses import fields, replace
 from typing import Any
 
 import casadi as ca
@@ -309,6 +309,12 @@ def solve_problem(
     if problem.cost_kind in ("work", "cot"):
         # Second stage: the exact switching-time transcription with the arcs of the slack
         # solution (its quadrature of max(0, uω) is first order across the switches).
+        # The arcs are read off the slack solution on a mesh twice as fine (on the coarse one
+        # a short bang arc spans a node or two, caught between its bound and zero).
+        slack_fine = _collocation(problem, col.mesh.refined())
+        w_slack, stats_slack = _run(slack_fine, slack_fine.from_solution(col, w, p), p)
+        if _converged(stats_slack):
+            col, w = slack_fine, w_slack
         structure = detect_structure(col, w, p)
         exact = _collocation(
             problem,
@@ -396,7 +402,5 @@ def _refined(col: Collocation) -> Collocation:
     """The same transcription with every mesh interval halved (each arc's too)."""
     if col.structure is None:
         return _collocation(col.problem, col.mesh.refined())
-    structure = [
-        [Arc(2 * a.intervals, a.signs, a.fraction) for a in arcs] for arcs in col.structure
-    ]
+    structure = [[replace(a, intervals=2 * a.intervals) for a in arcs] for arcs in col.structure]
     return _collocation(col.problem, col.mesh.refined(), structure)
