@@ -60,6 +60,22 @@ class InputProfile:
             value = value * local + row
         return value
 
+    def vectorised(self, times: np.ndarray, step: int = 0) -> np.ndarray:
+        """``u`` at each of ``times`` (s): inputs × ``len(times)``, each column equal to
+        ``self(t)`` to the last bit (the same clipping, interval and Horner arithmetic);
+        ``step`` is ignored.  The simulator's fast path evaluates a step's stage times at once
+        (:class:`gaitopt.dop853.CompiledDOP853`)."""
+        del step
+        t = np.minimum(np.maximum(np.asarray(times, dtype=float), 0.0), self.duration)
+        i = np.searchsorted(self.breaks, t, side="right") - 1
+        np.minimum(np.maximum(i, 0, out=i), len(self.coefficients) - 1, out=i)
+        local = (t - self.breaks[i])[:, None]
+        c = self.coefficients[i]  # times × (degree + 1) × inputs
+        value = c[:, 0, :]
+        for power in range(1, c.shape[1]):
+            value = value * local + c[:, power, :]
+        return value.T
+
     def derivative(self, t: float) -> np.ndarray:
         """``du/dt`` (input units per second) inside the profile (left derivative at the end)."""
         t = min(max(float(t), 0.0), self.duration)

@@ -89,8 +89,15 @@ def simulate(
         ``feedforward(t, step) -> u``: an input that varies within a step, ``t`` the time since
         the last return to the section (s) and ``step`` the number of returns so far; it drives
         the flow and, at its time, the reset (an optimal gait's profile, held at its last value
-        if a step lasts longer).  It replaces ``inputs`` in the flow and the resets; guards and
-        constraints see the step's ``inputs``.
+        if a step lasts longer).  It replaces ``inputs`` in the flow, the resets, the guards,
+        admissibility rules and unilateral constraints, each of which sees the input at its
+        instant.  With ``method="DOP853"``, a feedforward that also has
+        ``vectorised(t, step)`` (inputs × ``len(t)`` for an array ``t``, equal to calling it at
+        each) is evaluated at a step's stage times at once and each step is one CasADi call
+        (about 10× faster); with ``breaks(step)`` too (the times since the section where the
+        input may jump, e.g. a piecewise-polynomial profile's breakpoints) no integrator step
+        crosses one (:func:`gaitopt.optimize.verify.feedforward_of` makes such a feedforward).
+        A plain callable is called once per stage in Python (same events, same semantics).
 
     Returns
     -------

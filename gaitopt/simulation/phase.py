@@ -69,11 +69,15 @@ class PhaseFunctions:
         self._events = [tr.guard for tr in phase.transitions]
         self._events += [c.function for c in self.constraints]
 
-    def step_function(self) -> ca.Function:
+    def step_function(self, varying: bool = False) -> ca.Function:
         """One DOP853 step with this phase's event functions (:mod:`gaitopt.dop853`): compiled
-        with the model class's kernels (:mod:`gaitopt.kernels.verify`) where known."""
+        with the model class's kernels (:mod:`gaitopt.kernels.verify`) where known.  With
+        ``varying``, the input is given at each stage time and check point (a feedforward):
+        CasADi's interpreter, built once per phase (no compiled kernel)."""
         from ..dop853 import step_function
 
+        if varying:
+            return step_function(self.phase.flow, self._events, _CHECKS_PER_STEP, varying=True)
         model_cls, index, constraints = self._compiled_key
         if model_cls is not None:
             from ..kernels.verify import verification_steps
@@ -95,6 +99,48 @@ class PhaseFunctions:
             feedforward, t_section, step = self._drive
             self._flow._u[:] = feedforward(t - t_section, step)
         return self._flow(x)
+
+    def vectorised_drive(self) -> dict | None:
+        """The feedforward for :class:`gaitopt.dop853.CompiledDOP853` (keywords ``drive``,
+        ``stops``, ``rate``) when it evaluates many times at once, else None (a plain callable:
+        one time per call, SciPy's stepper).
+
+        A feedforward qualifies with a method ``vectorised(t, step)`` (inputs × ``len(t)``, ``t``
+        an array of times since the section, equal to calling it at each); with ``breaks(step)``
+        too (times since the section where the input or a derivative may jump, as an optimal
+        gait's piecewise-polynomial profile has at its mesh points and its end), no step crosses
+        one: each step integrates one smooth piece, and the input's limit from before a break
+        drives the step that ends there, while the event functions at the break see the value
+        from the break on (the input at that instant, as everywhere)."""
+        if self._drive is None:
+            return None
+        feedforward, t_section, step = self._drive
+        vectorised = getattr(feedforward, "vectorised", None)
+        if not callable(vectorised):
+            return None
+        n_u = self._flow._u.size
+        breaks = getattr(feedforward, "breaks", None)
+        local = np.zeros(0)
+        if callable(breaks):
+            local = np.unique(np.asarray(breaks(step), dtype=float).ravel())
+            local = local[local > 0]
+        before = np.nextafter(local, -np.inf)  # the last time before each break
+
+        def drive(times: np.ndarray, stop: int | None) -> np.ndarray:
+            t = np.asarray(times, dtype=float) - t_section
+            if stop is not None:  # a step ending at a break: the limit from before it
+                np.minimum(t, before[stop], out=t)
+                t[-1] = local[stop]  # ... but the events there see the value from it on
+            u = np.asarray(vectorised(t, step), dtype=float)
+            return u.reshape(n_u, t.size)
+
+        flow = self._flow
+
+        def rate(x: np.ndarray, u: np.ndarray) -> np.ndarray:
+            flow._u[:] = u
+            return flow(x)
+
+        return {"drive": drive, "stops": t_section + local, "rate": rate}
 
     def jac(self, t: float, x: np.ndarray) -> np.ndarray:
         if self._jac is None:
@@ -209,11 +255,15 @@ def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_t
     from scipy.optimize import brentq
 
     n_tr = funcs.events
-    if method == "DOP853" and funcs._drive is None:  # one CasADi call per step (same method)
+    drive = funcs.vectorised_drive()  # a feedforward evaluated at a step's times at once
+    if method == "DOP853" and (funcs._drive is None or drive is not None):
+        # one CasADi call per step (same method); with a feedforward, its values at the step's
+        # stage times and check points are the call's input
         from ..dop853 import CompiledDOP853
 
-        solver = CompiledDOP853(funcs.rhs, funcs.step_function(), funcs.u, funcs.p, t0, x0,
-                                t0 + max_time, rtol=rtol, atol=atol)  # fmt: skip
+        step = funcs.step_function(varying=drive is not None)
+        solver = CompiledDOP853(funcs.rhs, step, funcs.u, funcs.p, t0, x0, t0 + max_time,
+                                rtol=rtol, atol=atol, **(drive or {}))  # fmt: skip
     else:
         kwargs = {"jac": funcs.jac} if method in ("Radau", "LSODA") else {}
         solver = solver_cls(funcs.rhs, t0, x0, t0 + max_time, rtol=rtol, atol=atol, **kwargs)
@@ -256,9 +306,10 @@ def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_t
                 current = float(signed[k, j - 1])
                 if was_armed and previous < 0 <= current and compiled is not None:
                     # confirm on the dense output itself (the bracket brentq is given)
+                    end = dense(grid[j]) if j < _CHECKS_PER_STEP else solver.y
                     ends = [
-                        funcs.signed_guard(k, dense(grid[j - 1])),
-                        funcs.signed_guard(k, dense(grid[j]) if j < _CHECKS_PER_STEP else solver.y),
+                        funcs.signed_guard(k, dense(grid[j - 1]), grid[j - 1]),
+                        funcs.signed_guard(k, end, grid[j]),
                     ]
                     previous, current = ends
                 if was_armed and previous < 0 <= current:
