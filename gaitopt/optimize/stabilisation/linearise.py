@@ -15,6 +15,7 @@ from ...simulation import Simulation, simulate
 from ..collocation import Collocation, _derivative_matrix
 from ..floquet import _end_jacobians, _lift_jacobian
 from ..result import OptimalGait
+from ..verify import feedforward_of
 
 __all__ = [
     "offset_jacobian",
@@ -130,11 +131,30 @@ def offset_jacobian(col: Collocation, w: np.ndarray, p_model: np.ndarray) -> tup
     return M[:n0, :m][rows, :], M[:n0, m:][rows, :]
 
 
+class _Offset:
+    """``u*(t) + δₖ`` for :func:`gaitopt.simulate` (``k`` the returns so far; ``offsets[k]`` read
+    when step ``k`` runs, so a policy may fill it in as the run goes), vectorised like the
+    optimum's own feedforward (one CasADi call per integrator step)."""
+
+    def __init__(self, gait: OptimalGait, offsets: dict[int, np.ndarray]):
+        self.base = feedforward_of(gait.profiles)
+        self.offsets = offsets
+
+    def __call__(self, t: float, k: int) -> np.ndarray:
+        return self.base(t, k) + self.offsets[k]
+
+    def vectorised(self, times: np.ndarray, k: int) -> np.ndarray:
+        return self.base.vectorised(times, k) + np.asarray(self.offsets[k], dtype=float)[:, None]
+
+    def breaks(self, k: int) -> np.ndarray:
+        return self.base.breaks(k)
+
+
 def _feedforward(
     gait: OptimalGait, offsets: dict[int, np.ndarray]
 ) -> Callable[[float, int], np.ndarray]:
-    """``u*(t) + δₖ`` for :func:`gaitopt.simulate` (``k`` the returns so far)."""
-    return lambda t, k: gait.feedforward(t, k) + offsets[k]
+    """``u*(t) + δₖ`` for :func:`gaitopt.simulate` (see :class:`_Offset`)."""
+    return _Offset(gait, offsets)
 
 
 def simulate_offsets(
