@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -144,3 +145,21 @@ def test_hip_torque_costs_more_than_push_off_at_the_same_gait(push_off):
     assert hip.cost / push.cost > 4 * math.cos(alpha) ** 4
     assert np.max(np.abs(hip.inputs["push_off"])) <= 1e-15  # switched off (profile rounding)
     assert min(hip.inputs["hip_torque"]) >= -1e-9
+
+
+def test_push_off_gait_from_the_cli_is_the_python_one(push_off, capsys):
+    # `--bound hip_torque=0` switches the hip torque off from the command line (the push-off's
+    # declared 0 ≤ P stays): the same statement as the fixture's, so the same optimum (1e-12).
+    from gaitopt.cli import main
+
+    argv = ["optimize", "simplest_walker", "--set", "slope=0", "--cost", "work"]
+    status = main([*argv, "--fix", "step_length=0.4", "--bound", "hip_torque=0", "--json"])
+    report = json.loads(capsys.readouterr().out)
+    assert status == 0 and report["success"], report["message"]
+    assert report["cost"] == pytest.approx(push_off.cost, rel=1e-12)
+    assert max(abs(u) for u in report["inputs"]["hip_torque"]) == 0.0
+    # A range LOW:HIGH is accepted; a negative bound, LOW > HIGH or text is bad input (exit 2).
+    for bad in ("hip_torque=-1", "hip_torque=0.2:0.1", "hip_torque=a:1", "push=1"):
+        assert main([*argv, "--fix", "step_length=0.4", "--bound", bad]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "--bound" in err

@@ -13,7 +13,9 @@
 INPUT: [...]}`` over one orbit), ``multipliers`` (``[re, im]``), ``stable``, ``verified``,
 ``discretisation_error``, ``active_constraints`` and, with ``--starts`` > 1, ``minima``.  Bounds
 the model declares (``input_bounds``, ``state_bounds``: the five-link biped's |u| ≤ 100 N·m,
-|q| ≤ π/2, |q̇| ≤ 10) apply unless ``--bound`` overrides an input's.  ``--out DIR`` writes
+|q| ≤ π/2, |q̇| ≤ 10) apply unless ``--bound`` overrides an input's: ``--bound INPUT=MAX`` for
+|u| ≤ MAX (0 switches the input off), ``--bound INPUT=LOW:HIGH`` for LOW ≤ u ≤ HIGH (within what
+the model declares: Kuo's push-off only pushes).  ``--out DIR`` writes
 ``optimal.json``, ``inputs.csv``, ``orbit.png``, ``inputs.png`` and ``gait.gif``.  Exit status
 0 optimal gait found and verified, 1 none (the JSON is still printed), 2 bad input.
 
@@ -42,6 +44,7 @@ registers this one in its ``SUBCOMMANDS``).
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -75,7 +78,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--bound",
         action="append",
         metavar="INPUT=MAX",
-        help="|INPUT| <= MAX at every collocation point (input units); repeatable",
+        help="|INPUT| <= MAX at every collocation point (input units; 0 switches the input "
+        "off), or INPUT=LOW:HIGH; repeatable",
     )
     parser.add_argument(
         "--free", action="append", metavar="PARAM", help="optimise this parameter too"
@@ -139,17 +143,12 @@ def _parse(args: argparse.Namespace, model: Any) -> dict[str, Any]:
             )
         if not value > 0:
             raise InputError(f"--fix {item}: must be positive, e.g. --fix {name}=0.8")
-    examples = {n: f"{n}=10" for n in model.inputs} or {"INPUT": "INPUT=10"}
-    bounds = {n: max(abs(lo), abs(hi)) for n, (lo, hi) in model.input_bounds.items()}
-    for name, (item, value) in _assignments("--bound", args.bound, examples).items():
-        if name not in model.inputs:
-            raise InputError(
-                f"--bound {item}: {model.name} has no input {name!r}; "
-                f"{did_you_mean(name, model.inputs)}inputs: {', '.join(model.inputs) or 'none'}"
-            )
-        if not value > 0:
-            raise InputError(f"--bound {item}: the bound must be positive, e.g. --bound {name}=10")
-        bounds[name] = value
+    bounds: dict[str, Any] = {  # the model's finite declared bounds (applied anyway)
+        n: float(hi) if lo == -hi else (float(lo), float(hi))
+        for n, (lo, hi) in model.input_bounds.items()
+        if math.isfinite(lo) and math.isfinite(hi)
+    }
+    bounds.update(_bounds(args.bound, model))
     free = tuple(args.free or ())
     for name in free:
         if name not in model.params:
@@ -163,6 +162,35 @@ def _parse(args: argparse.Namespace, model: Any) -> dict[str, Any]:
         "state_bounds": dict(model.state_bounds),
         "free": free,
     }
+
+
+def _bounds(items: list[str] | None, model: Any) -> dict[str, Any]:
+    """``--bound INPUT=MAX`` (``|u| <= MAX``; 0 switches the input off) or ``INPUT=LOW:HIGH``."""
+    from .common import InputError, _number, _split
+
+    examples = {n: f"{n}=10" for n in model.inputs} or {"INPUT": "INPUT=10"}
+    bounds: dict[str, Any] = {}
+    for item in items or ():
+        name, text = _split("--bound", item, examples)
+        if name not in model.inputs:
+            raise InputError(
+                f"--bound {item}: {model.name} has no input {name!r}; "
+                f"{did_you_mean(name, model.inputs)}inputs: {', '.join(model.inputs) or 'none'}"
+            )
+        example = f"--bound {name}=10 (|u| <= 10), {name}=0 (off) or {name}=0:10"
+        if ":" in text:
+            low_text, _, high_text = text.partition(":")
+            low = _number("--bound", item, low_text.strip(), f"{name}=0:10")
+            high = _number("--bound", item, high_text.strip(), f"{name}=0:10")
+            if not low <= high:
+                raise InputError(f"--bound {item}: LOW must not exceed HIGH; e.g. {example}")
+            bounds[name] = (low, high)
+        else:
+            value = _number("--bound", item, text, f"{name}=10")
+            if not value >= 0:
+                raise InputError(f"--bound {item}: the bound must be >= 0; e.g. {example}")
+            bounds[name] = value
+    return bounds
 
 
 def run(args: argparse.Namespace) -> int:
