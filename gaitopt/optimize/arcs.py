@@ -6,6 +6,8 @@ inside a mesh interval are shared out between their neighbours."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from .collocation import Arc, Collocation
@@ -141,21 +143,22 @@ def _absorb_switches(runs: list[list]) -> list[list]:
             runs[j - 1 : j + 2] = [[before[0], middle, before[2]], [middle + 1, after[1], after[2]]]
 
 
-def _merge_blips(
-    arcs: list[tuple[float, tuple[int, ...]]], shortest: float
-) -> list[tuple[float, tuple[int, ...]]]:
+def _merge_blips(arcs: list[tuple[float, Any]], shortest: float) -> list[tuple[float, Any]]:
     """Arcs without blips: an arc shorter than ``shortest`` (a fraction of the phase) between
-    two arcs of the same signs, or next to an arc of its own signs, is merged with them — a
+    two arcs of the same kinds, or next to an arc of its own kinds, is merged with them — a
     node or two where the input passes between classes at a switch, or noise where the cost is
-    flat (a coasting arc), not a switch of the optimum's own; then neighbours of the same signs
-    are joined (the transcription treats them alike, so a switch between them would be a free
-    variable the cost does not fix)."""
+    flat, not a switch of the optimum's own — unless an input sits at a bound on it (a short
+    bang, such as the kneed walker's braking pulse of the hip, is the optimum's own); then
+    neighbours of the same kinds are joined (the transcription treats them alike, so a switch
+    between them would be a free variable the cost does not fix).  ``kinds`` are compared
+    whole (an arc's kinds and bounds)."""
     arcs = list(arcs)
     changed = True
     while changed and len(arcs) >= 2:
         changed = False
         for j, (f, signs) in enumerate(arcs):
-            if f >= shortest:
+            bang = isinstance(signs, tuple) and len(signs) == 2 and any(np.ravel(signs[1]))
+            if f >= shortest or bang:
                 continue
             before = arcs[j - 1][1] if j > 0 else None
             after = arcs[j + 1][1] if j + 1 < len(arcs) else None
