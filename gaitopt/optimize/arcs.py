@@ -116,6 +116,31 @@ def detect_structure(
     return structure
 
 
+def structure_of(
+    col: Collocation | None, w: np.ndarray | None, intervals: int = ARC_INTERVALS
+) -> list[list[Arc]] | None:
+    """The arcs of a solved switching-time transcription (``col``, ``w``) with ``intervals``
+    mesh intervals each and its arc durations as guesses (None if it has no structure): a
+    neighbour's arcs, to try where a slack solution's fail."""
+    if col is None or w is None or col.structure is None:
+        return None
+    most = max(len(arcs) for arcs in col.structure)
+    out = []
+    for k, arcs in enumerate(col.structure):
+        theta = col.theta_of(w, k)
+        counts = [intervals] * len(arcs)
+        order = np.argsort(-theta)
+        for extra in range(intervals * most - sum(counts)):
+            counts[int(order[extra % len(arcs)])] += 1
+        out.append(
+            [
+                Arc(n, a.signs, max(float(f), 1e-3), a.bounds)
+                for n, a, f in zip(counts, arcs, theta, strict=True)
+            ]
+        )
+    return out
+
+
 #: Runs of at most this many nodes inside a phase are switches, not arcs.
 BLIP_NODES = 2
 

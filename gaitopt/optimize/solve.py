@@ -22,7 +22,7 @@ import numpy as np
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
 from .active import _active, _violation
-from .arcs import _describe, detect_structure
+from .arcs import _describe, detect_structure, structure_of
 from .certify import _certify
 from .collocation import Arc, Collocation, RadauMesh
 from .guess import _start_guess
@@ -322,6 +322,20 @@ def solve_problem(
             structure,
         )
         w_exact, stats_exact = _run(exact, exact.from_solution(col, w, p), p)
+        previous = structure_of(*getattr(guess, "transcription", (None, None)))
+        if (
+            not _converged(stats_exact)
+            and previous
+            and len(previous) == len(col.chain)
+            and _describe(previous) != _describe(structure)
+        ):
+            # A neighbour's arcs (a library's previous optimum), from this slack solution.
+            alt = _collocation(
+                problem, RadauMesh(sum(a.intervals for a in previous[0]), col.d), previous
+            )
+            w_alt, stats_alt = _run(alt, alt.from_solution(col, w, p), p)
+            if _converged(stats_alt):
+                structure, exact, w_exact, stats_exact = previous, alt, w_alt, stats_alt
         if not _converged(stats_exact):
             return OptimalGait(
                 False,
