@@ -168,8 +168,10 @@ def test_multistart_is_seeded_and_reports_minima():
     assert a.success
     assert [m.starts for m in a.minima] == [m.starts for m in b.minima]
     assert sum(len(m.starts) for m in a.minima) <= 3
-    # The minima carry the starts' mesh; the best is then refined (error below 1e-8).
-    assert a.cost == pytest.approx(min(m.cost for m in a.minima), rel=1e-8)
+    # Every minimum is refined and certified; the result is the lowest certified one.
+    assert a.cost == pytest.approx(min(m.cost for m in a.minima), rel=1e-12)
+    assert all(m.discretisation_error <= 1e-8 for m in a.minima)
+    assert not any(m.verified for m in a.minima)  # verify=False: nothing was simulated
 
 
 def test_bad_input_is_one_error():

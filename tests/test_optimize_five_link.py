@@ -40,6 +40,8 @@ def test_both_optimtraj_minima(gait):
     assert set(costs) == {(0,), (4,)}
     assert costs[(4,)] == pytest.approx(GPOPS_IPOPT, rel=1e-6)
     assert costs[(0,)] == pytest.approx(GPOPS_SNOPT, rel=1e-6)
+    # Each minimum is refined (below 1e-8) and verified by simulation, not only the best.
+    assert all(m.verified and m.discretisation_error <= 1e-8 for m in gait.minima)
     # The best, refined until its discretisation error is below 1e-8, is the IPOPT log's.
     assert gait.cost == pytest.approx(GPOPS_IPOPT, rel=1e-6)
     assert gait.discretisation_error <= 1e-8

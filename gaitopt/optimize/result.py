@@ -18,6 +18,9 @@ class Minimum:
 
     Attributes
     ----------
+    Every minimum is refined and certified like the reported optimum; where that succeeds the
+    values are the refined ones, otherwise those on the starts' mesh.
+
     cost : float
         Optimal cost (units of the cost kind).
     period : float
@@ -27,7 +30,12 @@ class Minimum:
     starts : list of int
         The starts (0-based) that reached it.
     verified : bool
-        Whether it passed the dense and simulation checks on the starts' mesh.
+        Certified: the dense checks, the independent simulation and the refinement target all
+        met (:attr:`OptimalGait.success` of its own refinement).
+    discretisation_error : float or None
+        Its refinement's estimate (relative), None where it was not certified.
+    message : str
+        What its certification found.
     """
 
     cost: float
@@ -35,6 +43,8 @@ class Minimum:
     fixed_point: dict[str, float]
     starts: list[int] = field(default_factory=list)
     verified: bool = False
+    discretisation_error: float | None = None
+    message: str = ""
 
     def to_json(self) -> dict[str, Any]:
         """Plain JSON types."""
@@ -46,6 +56,8 @@ class Minimum:
                 "starts": self.starts,
                 "count": len(self.starts),
                 "verified": self.verified,
+                "discretisation_error": self.discretisation_error,
+                "message": self.message,
             }
         )
 

@@ -302,9 +302,56 @@ def solve_problem(
             **common,
         )
 
-    # Refine the best minimum's mesh until cost and orbit settle.
-    best = minima[0]
-    w, stats = best["w"], best["stats"]
+    # Every distinct minimum is refined and certified (a reported minimum is a gait); the
+    # result is the lowest certified one.
+    results = [
+        _finish(problem, col, m["w"], m["stats"], tol, verify, guess, common, t_start)
+        for m in minima
+    ]
+    chosen = next((j for j, r in enumerate(results) if r.success), 0)
+    result = results[chosen]
+    if chosen > 0:
+        result.message += (
+            f"; the lower minimum {minima[0]['cost']:.10g} (starts {minima[0]['starts']}) is "
+            f"not certified: {results[0].message}"
+        )
+    result.minima = [_minimum(model, m, r) for m, r in zip(minima, results, strict=True)]
+    if len(runs) > 1:
+        certified = sum(r.success for r in results)
+        result.message += (
+            f"; {len(minima)} distinct local minim{'um' if len(minima) == 1 else 'a'} from "
+            f"{len(runs)} starts ({sum(not r['ok'] for r in runs)} did not converge; "
+            f"{certified} certified)"
+        )
+    result.solve_time = time.perf_counter() - t_start
+    return result
+
+
+def _minimum(model: HybridModel, m: dict[str, Any], r: OptimalGait) -> Minimum:
+    """One multi-start minimum: refined values where its refinement succeeded, the starts'
+    otherwise; ``verified`` only if the simulation confirmed it too."""
+    if r.success:
+        return Minimum(r.cost, r.period, dict(r.fixed_point), m["starts"], bool(r.verified),
+                       r.discretisation_error, r.message)  # fmt: skip
+    x = model.lift(m["s"])
+    fixed_point = dict(zip(model.state_names, map(float, x), strict=True))
+    return Minimum(m["cost"], m["period"], fixed_point, m["starts"], False, None, r.message)
+
+
+def _finish(
+    problem: GaitProblem,
+    col: Collocation,
+    w: np.ndarray,
+    stats: dict[str, Any],
+    tol: float,
+    verify: bool,
+    guess: OptimalGait | None,
+    common: dict[str, Any],
+    t_start: float,
+) -> OptimalGait:
+    """One minimum from the starts' mesh to a certified optimum: the exact work stage (work
+    costs), mesh doubling until cost and orbit settle below ``tol``, the checks."""
+    p = problem.model.p
     structure_note = ""
     if problem.cost_kind in ("work", "cot"):
         # Second stage: the exact switching-time transcription with the arcs of the slack
@@ -390,25 +437,6 @@ def solve_problem(
             f"Loosen `tol` to accept it, or bound the inputs so the optimum is smoother. "
             + result.message
         )
-    fixed_names = model.state_names
-    result.minima = []
-    for m in minima:
-        x = model.lift(m["s"])
-        result.minima.append(
-            Minimum(
-                m["cost"],
-                m["period"],
-                dict(zip(fixed_names, map(float, x), strict=True)),
-                m["starts"],
-                verified=(m is best and result.verified),
-            )
-        )
-    if len(runs) > 1:
-        result.message += (
-            f"; {len(minima)} distinct local minim{'um' if len(minima) == 1 else 'a'} from "
-            f"{len(runs)} starts ({sum(not r['ok'] for r in runs)} did not converge)"
-        )
-    result.solve_time = time.perf_counter() - t_start
     return result
 
 
