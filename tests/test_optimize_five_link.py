@@ -59,7 +59,8 @@ def test_optimum_is_verified_by_simulation(gait):
 def test_multipliers_two_ways(gait):
     ad, fd = np.sort_complex(gait.multipliers), np.sort_complex(gait.multipliers_fd)
     assert ad.size == 9 and fd.size == 9  # 10 states less the section's constraint
-    # AD through the collocation vs central differences of the simulated map; the largest
-    # multiplier (|μ| ≈ 42) amplifies integrator noise: 1e-3 relative to the largest.
-    np.testing.assert_allclose(ad, fd, atol=1e-3 * np.max(np.abs(ad)))
+    # AD through the collocation vs central differences (h = 1e-6) of the simulated map, whose
+    # integrator steps end at the profile's breakpoints (measured gap 1.7e-7 relative to the
+    # largest, |μ| ≈ 42): 1e-5 relative to the largest.
+    np.testing.assert_allclose(ad, fd, atol=1e-5 * np.max(np.abs(ad)))
     assert gait.stable is False  # open loop: a feedforward torque profile does not stabilise
