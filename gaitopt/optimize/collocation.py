@@ -321,6 +321,17 @@ class Collocation:
                 keep = np.isnan(values)
                 B.lb[slot] = np.where(keep, B.lb[slot], values)
                 B.ub[slot] = np.where(keep, B.ub[slot], values)
+                # An idle input the flow ignores too (the locked knee's torque) would be free
+                # values the cost cannot fix (a singular NLP): it is held at the value it takes
+                # as the phase begins (continuous with the previous phase inside a step), else 0.
+                for r in self._ignored_inputs(i):
+                    if r in problem.impulsive_index or ulo[r] == uhi[r]:  # a reset's; fixed
+                        continue
+                    if problem.continuous_inputs and k % len(model.phases):
+                        add(f"'{model.inputs[r]}' held over {label}", Uk[r, 1:] - Uk[r, 0])
+                    else:
+                        B.lb[slot][r::n_u] = 0.0
+                        B.ub[slot][r::n_u] = 0.0
                 u0 = ca.DM(self.u_at_start)
                 starts_u = ca.horzcat(*[ca.mtimes(Uk[:, j * d : j * d + d], u0) for j in range(N)])
                 starts_x = ca.horzcat(*[Xk[:, j * d] for j in range(N)])
@@ -430,6 +441,14 @@ class Collocation:
         x = ca.SX.sym("x", fn.size1_in(0))
         rates = fn(x, ca.SX.sym("p", fn.size1_in(1)))
         return [r for r in range(rates.shape[0]) if rates[r].is_zero()]
+
+    def _ignored_inputs(self, phase: int) -> list[int]:
+        """Idle inputs (:meth:`_idle_inputs`) on which ``phase``'s flow does not depend either."""
+        flow = self.model.phases[phase].flow
+        x = ca.SX.sym("x", flow.size1_in(0))
+        u = ca.SX.sym("u", flow.size1_in(1))
+        rhs = flow(x, u, ca.SX.sym("p", flow.size1_in(2)))
+        return [r for r in self._idle_inputs(phase) if not ca.depends_on(rhs, u[r])]
 
     def _clearance_margin(self, T: list[ca.MX], hs: list[Any], k: int) -> tuple[Any, Any]:
         """The clearance margin ``c · sin(π t / T_step)`` (m) at the collocation nodes of phase
