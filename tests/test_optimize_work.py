@@ -40,8 +40,8 @@ def simulation(model, gait):
 def test_work_optimum_is_certified(gait):
     # Source: the independent simulator (DOP853 with located events, rtol 1e-12) with the
     # optimal torque as feedforward, its cost by 8-point Gauss–Legendre panels: the same
-    # positive work to 1e-8 relative (2.7e-11 measured; certify's own check is 1e-6), the same
-    # fixed point to 1e-9 (6.6e-12 measured).  Refinement: cost and orbit settled below the
+    # positive work to 1e-8 relative (1e-11–3e-11 measured; certify's own check is 1e-6), the
+    # same fixed point to 1e-9 (about 1e-11 measured).  Refinement: cost and orbit settled below the
     # 1e-8 target (3.5e-9 measured, 12 → 24 intervals).
     assert gait.success and gait.verified, gait.message
     v = gait.verification
