@@ -46,6 +46,9 @@ _IPOPT = {
     "ipopt.mu_strategy": "adaptive",
     "error_on_fail": False,
     "expand": True,
+    # A trial point where a function is undefined (the five-link biped's section lift takes an
+    # arccos) is IPOPT's to reject and back off from; CasADi need not print each one.
+    "show_eval_warnings": False,
 }
 #: Transcriptions kept with their compiled NLPs, by statement and mesh (least recently used
 #: dropped first): each holds a compiled NLP of a few MB.
