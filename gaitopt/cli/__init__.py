@@ -47,8 +47,8 @@ from .common import (
     build_model,
     parse_guess,
     parse_x0,
-    write_outputs,
 )
+from .output import write_outputs
 
 __all__ = [
     "main",

@@ -1,18 +1,12 @@
-"""What every subcommand shares: exit codes, the one-line error, argument parsers for models,
-parameters and states, output helpers, and writing ``--out`` without losing results."""
+"""What every subcommand shares: exit codes, the one-line error, and the parsers of models,
+parameters, states and shared arguments (printing and ``--out``: :mod:`gaitopt.cli.output`)."""
 
 from __future__ import annotations
 
 import argparse
-import contextlib
-import ctypes
-import json
 import math
-import os
-import sys
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, NoReturn
 
 import numpy as np
@@ -24,7 +18,6 @@ from ..errors import (
     StateError,
     did_you_mean,
 )
-from ..files import jsonable
 from ..hybrid import HybridModel
 from ..models import REGISTRY
 from ..parameters import ParameterSpec, check_parameter
@@ -275,67 +268,7 @@ def _check_point(
         raise InputError(str(exc)) from None
 
 
-# -- output --------------------------------------------------------------------------------------
-@contextlib.contextmanager
-def _solver_output_to_stderr() -> Iterator[None]:
-    """Send whatever the solver prints to stderr while the block runs.
-
-    ``solve --json`` promises one JSON object on stdout, but CasADi's solver plugins print
-    (IPOPT's banner), through :data:`sys.stdout` or the C-level file descriptor 1 depending on
-    where the output goes.  Both are pointed at stderr here.
-    """
-    sys.stdout.flush()
-    try:
-        saved = os.dup(1)
-    except OSError:  # no file descriptor 1 to protect
-        saved = None
-    if saved is not None:
-        os.dup2(2, 1)
-    try:
-        with contextlib.redirect_stdout(sys.stderr):
-            yield
-            sys.stdout.flush()
-    finally:
-        if saved is not None:
-            _flush_c_stdio()
-            os.dup2(saved, 1)
-            os.close(saved)
-
-
-def _flush_c_stdio() -> None:
-    """``fflush(NULL)``: push out what C code buffered before file descriptor 1 is restored."""
-    with contextlib.suppress(OSError, AttributeError, TypeError):
-        ctypes.CDLL(None).fflush(None)
-
-
-def _print_json(value: Any) -> None:
-    print(json.dumps(jsonable(value), indent=2, ensure_ascii=False, allow_nan=False))
-
-
-def _format_params(params: Mapping[str, float]) -> str:
-    return ", ".join(f"{name}={value:g}" for name, value in params.items())
-
-
-def _print_rows(rows: Iterable[tuple[str, Any]]) -> None:
-    for label, value in rows:
-        print(f"{label:<12}{value}")
-
-
-def print_header(result: Any, *rows: tuple[str, Any]) -> None:
-    """The first lines of a result as text: its model and parameters, any ``rows``, then
-    ``success`` and ``message`` (a gait, a branch, a curve)."""
-    model = result.model
-    _print_rows(
-        [
-            ("model", f"{model.name} ({model.title})"),
-            ("params", _format_params(model.params)),
-            *rows,
-            ("success", result.success),
-            ("message", result.message),
-        ]
-    )
-
-
+# -- shared arguments ----------------------------------------------------------------------------
 def _model_arguments(parser: argparse.ArgumentParser) -> None:
     """``MODEL`` and ``--set``, shared by the subcommands that act on one model."""
     parser.add_argument("model", metavar="MODEL", help=f"model name (see `{PROG} list`)")
@@ -382,48 +315,3 @@ def _numbers(option: str, text: str | None, kind: type = float) -> list | None:
             raise InputError(f"{option} {text}: {part.strip()!r} is not finite")
         values.append(value)
     return values
-
-
-def write_outputs(out: str | None, write: Callable[[Path], None]) -> str | None:
-    """Write a subcommand's files into ``--out`` after its computation, never losing them.
-
-    ``--out`` was checked before the computation (:func:`main`); if writing still fails (the
-    directory was removed or filled meanwhile) the files go to a fresh fallback directory
-    (:func:`gaitopt.files.write_or_fall_back`).
-
-    Returns
-    -------
-    str or None
-        None if the files are in ``--out`` (or there is no ``--out``); otherwise the one-line
-        error to print on stderr, saying where the files are: the caller prints it after its
-        results and exits with status 2.
-    """
-    from ..files import write_or_fall_back
-
-    if not out:
-        return None
-    try:
-        folder, error = write_or_fall_back(out, write, prefix=f"{PROG}-out-")
-    except OSError as exc:
-        return f"{PROG}: error: --out {out}: cannot write there, nor to a fallback folder ({exc})"
-    if error is None:
-        return None
-    reason = " ".join(str(error).split())
-    return (
-        f"{PROG}: error: --out {out}: cannot write there ({reason}); the results were written "
-        f"to {folder} instead"
-    )
-
-
-def write_result(result: Any, folder: Path, stem: str, plot: Callable[[Any], Any]) -> None:
-    """``stem``.json, and with points ``stem``.csv and ``stem``.png, in ``folder`` (each written
-    atomically): the files of a branch or a curve (``as_dict``, ``cycles``, ``csv_rows``)."""
-    from ..files import write_csv, write_json
-    from ..plotting import save_figure
-
-    folder.mkdir(parents=True, exist_ok=True)
-    write_json(result.as_dict(), folder / f"{stem}.json")
-    if result.cycles:
-        write_csv(*result.csv_rows(), folder / f"{stem}.csv")
-        fig, _ = plot(result)
-        save_figure(fig, folder / f"{stem}.png")

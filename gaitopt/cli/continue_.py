@@ -25,14 +25,10 @@ from .common import (
     _gait_arguments,
     _model_arguments,
     _number,
-    _print_json,
-    _solver_output_to_stderr,
     build_model,
     parse_guess,
-    print_header,
-    write_outputs,
-    write_result,
 )
+from .output import _print_json, _solver_output_to_stderr, print_header, write_outputs, write_result
 
 
 # -- gaitopt continue ----------------------------------------------------------------------------

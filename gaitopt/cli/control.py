@@ -20,16 +20,13 @@ from .common import (
     InputError,
     _assignments,
     _check_point,
-    _format_params,
     _model_arguments,
     _numbers,
-    _print_json,
-    _print_rows,
-    _solver_output_to_stderr,
     _state_examples,
     build_model,
     parse_guess,
 )
+from .output import _format_params, _print_json, _print_rows, _solver_output_to_stderr
 
 
 # -- gaitopt control -----------------------------------------------------------------------------

@@ -21,19 +21,8 @@ from pathlib import Path
 from ..curves import CURVE_KINDS, Curve, bifurcation_curve
 from ..errors import GuessError, ParameterError, did_you_mean
 from ..parameters import check_parameter
-from .common import (
-    EXIT_NOT_FOUND,
-    EXIT_OK,
-    InputError,
-    _echo,
-    _number,
-    _print_json,
-    _solver_output_to_stderr,
-    build_model,
-    parse_guess,
-    print_header,
-    write_result,
-)
+from .common import EXIT_NOT_FOUND, EXIT_OK, InputError, _echo, _number, build_model, parse_guess
+from .output import _print_json, _solver_output_to_stderr, print_header, write_result
 
 __all__ = ["add_curve_arguments", "wants_curve", "run_curve"]
 

@@ -90,7 +90,8 @@ def describe(name: str, settings: list[str] | None, samples: int) -> dict[str, A
 
 def run(args: argparse.Namespace) -> int:
     """Print the linkage's numbers; 0, or :class:`gaitopt.cli.InputError` for bad input."""
-    from .common import EXIT_OK, _print_json
+    from .common import EXIT_OK
+    from .output import _print_json
 
     report = describe(args.linkage, args.set, args.samples)
     if args.json:

@@ -7,10 +7,8 @@ from typing import Any
 
 from ..hybrid import HybridModel
 from ..models import REGISTRY
-from .common import (
-    EXIT_OK,
-    _print_json,
-)
+from .common import EXIT_OK
+from .output import _print_json
 
 
 # -- gaitopt list --------------------------------------------------------------------------------

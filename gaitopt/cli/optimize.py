@@ -196,16 +196,8 @@ def _bounds(items: list[str] | None, model: Any) -> dict[str, Any]:
 def run(args: argparse.Namespace) -> int:
     """``gaitopt optimize``: the optimal gait, verified by simulation, with its multipliers."""
     from ..optimize import optimize_gait
-    from .common import (
-        EXIT_BAD_INPUT,
-        EXIT_NOT_FOUND,
-        EXIT_OK,
-        InputError,
-        _print_json,
-        _solver_output_to_stderr,
-        build_model,
-        write_outputs,
-    )
+    from .common import EXIT_BAD_INPUT, EXIT_NOT_FOUND, EXIT_OK, InputError, build_model
+    from .output import _print_json, _solver_output_to_stderr, write_outputs
 
     model = build_model(args.model, args.set)
     options = _parse(args, model)
@@ -279,7 +271,7 @@ def _weights(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _print(report: dict[str, Any]) -> None:
-    from .common import _print_rows
+    from .output import _print_rows
 
     rows = [
         ("model", report["model"]),

@@ -56,15 +56,8 @@ def run_library(args: argparse.Namespace, model: Any, options: dict[str, Any]) -
     """Build the library ``--library`` asks for; print (or ``--json``) and write (``--out``) it;
     the exit status."""
     from ..optimize.library import gait_library
-    from .common import (
-        EXIT_BAD_INPUT,
-        EXIT_NOT_FOUND,
-        EXIT_OK,
-        InputError,
-        _print_json,
-        _solver_output_to_stderr,
-        write_outputs,
-    )
+    from .common import EXIT_BAD_INPUT, EXIT_NOT_FOUND, EXIT_OK, InputError
+    from .output import _print_json, _solver_output_to_stderr, write_outputs
 
     vary, values = _parse_library(args, model, options)
     try:
@@ -103,7 +96,7 @@ def run_library(args: argparse.Namespace, model: Any, options: dict[str, Any]) -
 
 
 def _print_library(report: dict[str, Any]) -> None:
-    from .common import _print_rows
+    from .output import _print_rows
 
     rows = [
         ("model", report["model"]),

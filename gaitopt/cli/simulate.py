@@ -22,15 +22,12 @@ from .common import (
     InputError,
     _check_point,
     _count,
-    _format_params,
     _model_arguments,
-    _print_json,
-    _print_rows,
-    _solver_output_to_stderr,
     build_model,
     parse_guess,
     parse_x0,
 )
+from .output import _format_params, _print_json, _print_rows, _solver_output_to_stderr
 
 
 # -- gaitopt simulate ----------------------------------------------------------------------------

@@ -17,14 +17,11 @@ from .common import (
     _echo,
     _gait_arguments,
     _model_arguments,
-    _print_json,
-    _print_rows,
     _scheduler_address,
-    _solver_output_to_stderr,
     build_model,
     parse_guess,
-    print_header,
 )
+from .output import _print_json, _print_rows, _solver_output_to_stderr, print_header
 
 
 def _solve_arguments(parser: argparse.ArgumentParser) -> None:
