@@ -20,7 +20,7 @@ dense samples keep the knee from striking early and the swing foot above the slo
 independent simulator with the optimal torque as a feedforward returns to the fixed point with
 the same cost.  Otherwise the speed is listed as a failure with the solver's reason.
 
-    python problems/optimal_kneed_cot.py --out results [--fast]
+    python problems/optimal_kneed_cot.py --out results [--fast | --redraw]
 
 Writes results/optimal_kneed_cot/: cot.json, cot.csv, cot.png.
 """
@@ -71,9 +71,15 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", default="results", help="results folder")
     parser.add_argument("--fast", action="store_true", help="one speed, for CI")
+    parser.add_argument(
+        "--redraw", action="store_true", help="only redraw cot.png from the cot.csv written"
+    )
     args = parser.parse_args(argv)
     folder = Path(args.out) / "optimal_kneed_cot"
     folder.mkdir(parents=True, exist_ok=True)
+    if args.redraw:
+        redraw(folder)
+        return 0
 
     speeds = FAST_SPEEDS if args.fast else SPEEDS
     solved: dict[float, object] = {}
@@ -153,15 +159,22 @@ def main(argv: list[str] | None = None) -> int:
         folder / "cot.csv",
     )  # fmt: skip
 
+    good = draw([(r[0], r[1], bool(r[4])) for r in rows], folder)
+    return 0 if good else 1
+
+
+def draw(points: list[tuple[float, float | None, bool]], folder: Path) -> bool:
+    """``cot.png``: the certified optima (speed, cot) and the speeds with none, at 0; returns
+    whether any is certified."""
     fig, ax = plt.subplots(figsize=(6, 4.2))
-    good = [r for r in rows if r[4]]
+    good = [(v, c) for v, c, ok in points if ok]
     if good:
-        ax.plot([r[0] for r in good], [r[1] for r in good], "o-", label="certified optimum")
-    bad = [r[0] for r in rows if not r[4]]
+        ax.plot(*zip(*good, strict=True), "o-", label="certified optimum")
+    bad = [v for v, _, ok in points if not ok]
     if bad:
         ax.plot(bad, np.zeros(len(bad)), "rx", ms=9, label="no certified optimum (at 0)")
     ax.set_xlabel("speed v (m/s)")
-    ax.set_ylabel("cost of transport (1)")
+    ax.set_ylabel(r"cost of transport $c_T = W^+/(M g d)$ (1)")
     ax.set_title(
         f"Kneed walker, slope {SLOPE} rad, step L = {STEP} m, hip |τ| ≤ "
         f"{BOUNDS['hip_torque']:g} N·m, passive knee",
@@ -169,7 +182,23 @@ def main(argv: list[str] | None = None) -> int:
     )
     ax.legend()
     save_figure(fig, folder / "cot.png")
-    return 0 if good else 1
+    return bool(good)
+
+
+def redraw(folder: Path) -> None:
+    """Redraw ``cot.png`` from the ``cot.csv`` a run wrote (no optimisation)."""
+    import csv
+
+    with open(folder / "cot.csv", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    draw(
+        [
+            (float(r["speed_m_per_s"]), float(r["cost_of_transport"] or "nan"),
+             r["success"] == "True")
+            for r in rows
+        ],
+        folder,
+    )  # fmt: skip
 
 
 if __name__ == "__main__":
