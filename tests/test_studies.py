@@ -241,3 +241,27 @@ def test_least_effort_rises_quadratically_away_from_the_passive_period(compass_s
     ratios = summary["effort_over_squared_period_offset"]
     assert len(ratios) >= 4 and min(ratios) > 0
     assert max(ratios) / min(ratios) < 1.5
+
+
+# -- the other optimal-gait studies, in their fast modes ------------------------------------------
+def test_compass_library_study_reproduces_the_readme_efforts(tmp_path):
+    # README table (problems/optimal_compass_library.py, full run): least effort at 0.8 s for
+    # 0.2, 0.25, 0.3 m; each refined below 1e-8, so 1e-8 relative; cold starts agree (1e-8).
+    folder = _run("optimal_compass_library", tmp_path)
+    rows = np.genfromtxt(folder / "library.csv", delimiter=",", skip_header=1, usecols=(0, 1, 2))
+    expected = {0.2: 0.2856223108, 0.25: 1.469482918, 0.3: 6.668848535}
+    assert len(rows) == 3
+    for step, warm, cold in rows:
+        assert warm == pytest.approx(expected[round(step, 2)], rel=1e-8)
+        assert cold == pytest.approx(warm, rel=1e-8)
+
+
+def test_compass_effort_study_warm_and_cold_agree(tmp_path):
+    # The script exits 0 only if every warm-started optimum equals its cold start (1e-8).
+    _run("optimal_compass_effort", tmp_path)
+
+
+def test_kuo_study_push_off_is_the_closed_form(tmp_path):
+    # Kuo 2002: the optimal push-off gait's P = v tan α (closed form), to 1e-9 relative.
+    summary = _load(_run("optimal_kuo_pushoff", tmp_path), "pushoff.json")
+    assert summary["push_off_relative_error"] <= 1e-9
