@@ -19,7 +19,6 @@ from ..errors import (
     did_you_mean,
 )
 from ..hybrid import HybridModel
-from ..models import REGISTRY
 from ..parameters import ParameterSpec, check_parameter
 
 PROG = "gaitopt"
@@ -151,13 +150,21 @@ def _echo(option: str, items: Iterable[str]) -> str:
 
 # -- models, parameters, states -----------------------------------------------------------------
 def _model_class(name: str) -> type[HybridModel]:
-    """The registered model class called ``name``."""
-    if name in REGISTRY:
-        return REGISTRY[name]
-    raise InputError(
-        f"MODEL {name!r} is not a model; {did_you_mean(name, REGISTRY)}"
-        f"available: {', '.join(REGISTRY)} (see `{PROG} list`)"
-    )
+    """The model class called ``name``: registered, or declared by an installed package's
+    entry point (group ``gaitopt.models``, loaded now: :func:`gaitopt.models.model_class`)."""
+    from ..errors import UnknownModelError
+    from ..models import model_class, model_names
+
+    names = model_names()
+    if name not in names:
+        raise InputError(
+            f"MODEL {name!r} is not a model; {did_you_mean(name, names)}"
+            f"available: {', '.join(names)} (see `{PROG} list`)"
+        )
+    try:
+        return model_class(name)
+    except UnknownModelError as exc:  # an installed package's entry point that does not load
+        raise InputError(f"MODEL {name}: {exc}") from None
 
 
 def _parameter(model_name: str, specs: Mapping[str, ParameterSpec], item: str) -> tuple[str, float]:

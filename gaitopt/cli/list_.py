@@ -1,13 +1,15 @@
-"""``gaitopt list``: the registered models, their parameters, states, sections and inputs."""
+"""``gaitopt list``: the registered models (with those installed packages declare through the
+``gaitopt.models`` entry point group), their parameters, states, sections and inputs."""
 
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any
 
 from ..hybrid import HybridModel
-from ..models import REGISTRY
-from .common import EXIT_OK
+from ..models import REGISTRY, load_entry_points
+from .common import EXIT_OK, PROG
 from .output import _print_json
 
 
@@ -32,7 +34,14 @@ def _list_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run_list(args: argparse.Namespace) -> int:
-    """``gaitopt list``: the models, their parameters, states and sections."""
+    """``gaitopt list``: the models, their parameters, states and sections.
+
+    The models of installed packages' entry points are loaded and listed after the built-in
+    ones; one that cannot be loaded is named in a one-line warning on stderr (the others are
+    still listed, and the exit status stays 0: the command line's input was fine).
+    """
+    for problem in load_entry_points():
+        print(f"{PROG}: warning: {' '.join(str(problem).split())}", file=sys.stderr)
     models = [describe_model(cls) for cls in REGISTRY.values()]
     if args.json:
         _print_json(models)

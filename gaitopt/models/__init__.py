@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from types import ModuleType
+from typing import TYPE_CHECKING
+
 from ..errors import ParameterError, UnknownModelError, did_you_mean
 from ..hybrid import HybridModel
 from .ballistic_walker import BallisticWalker
@@ -19,9 +22,16 @@ from .strandbeest import Strandbeest
 from .vanderpol import VanDerPol
 from .vertical_hopper import VerticalHopper
 
+if TYPE_CHECKING:
+    from importlib.metadata import EntryPoint
+
 __all__ = [
     "REGISTRY",
+    "ENTRY_POINT_GROUP",
     "model",
+    "model_class",
+    "model_names",
+    "load_entry_points",
     "as_model",
     "register",
     "unregister",
@@ -62,18 +72,36 @@ REGISTRY: dict[str, type[HybridModel]] = {
 }
 
 
+#: The entry-point group through which installed packages declare their models.
+ENTRY_POINT_GROUP = "gaitopt.models"
+
+
 def register(cls: type[HybridModel]) -> type[HybridModel]:
     """Register a model class under its ``name``, for :func:`model` and the CLI.
 
-    Usable as a decorator.  A package can also register its models without being imported
-    first, through the entry-point group ``gaitopt.models`` (``name = "package.module:Class"``),
-    which :func:`model` consults for a name it does not know.
+    Usable as a decorator.  A package can also declare its models without being imported first,
+    through the entry-point group ``gaitopt.models`` (``name = "package.module:Class"``), which
+    :func:`model`, :func:`model_class`, ``gaitopt solve NAME`` and ``gaitopt list`` consult.
+    Loading such an entry point imports the module, whose ``@register`` (if it has one) registers
+    the class; the loader then registers it again, which is why registering the class that is
+    already registered under its name is a no-op.
+
+    Parameters
+    ----------
+    cls : type
+        A :class:`~gaitopt.hybrid.HybridModel` subclass with a ``name``.
+
+    Returns
+    -------
+    type
+        ``cls`` itself (so the function works as a decorator).
 
     Raises
     ------
     GaitoptInputError
-        If ``cls`` is not a :class:`~gaitopt.hybrid.HybridModel` subclass with a ``name``, or the
-        name is taken (unregister the old one first: one meaning per name).
+        If ``cls`` is not a :class:`~gaitopt.hybrid.HybridModel` subclass with a ``name``, or a
+        *different* class is registered under that name (unregister the old one first: one
+        meaning per name).
     """
     from ..errors import GaitoptInputError
 
@@ -82,53 +110,173 @@ def register(cls: type[HybridModel]) -> type[HybridModel]:
             f"register: expected a HybridModel subclass with a `name`, got {cls!r}; see "
             f"docs/writing-a-model.md"
         )
-    if cls.name in REGISTRY:
+    taken = REGISTRY.get(cls.name)
+    if taken is cls:
+        return cls
+    if taken is not None:
         raise GaitoptInputError(
             f"register: a model named {cls.name!r} is already registered "
-            f"({REGISTRY[cls.name].__module__}); call gaitopt.unregister({cls.name!r}) first"
+            f"({taken.__module__}.{taken.__qualname__}), so {cls.__module__}.{cls.__qualname__} "
+            f"cannot take that name; call gaitopt.unregister({cls.name!r}) first, or give the "
+            f"new class another `name`"
         )
     REGISTRY[cls.name] = cls
     return cls
 
 
 def unregister(name: str) -> None:
-    """Remove a registered model (a no-op for an unknown name)."""
+    """Remove a registered model (a no-op for an unknown name).
+
+    A model of an installed package's entry point is registered again the next time its name
+    is asked for.
+    """
     REGISTRY.pop(name, None)
 
 
-def _from_entry_points(name: str) -> None:
-    """Register the model ``name`` if an installed package declares it as an entry point."""
+def _entry_points() -> list[EntryPoint]:
+    """The installed packages' entry points of :data:`ENTRY_POINT_GROUP`, first of a name
+    first (the order of ``sys.path``)."""
     from importlib.metadata import entry_points
 
-    for entry in entry_points(group="gaitopt.models"):
+    return list(entry_points(group=ENTRY_POINT_GROUP))
+
+
+def _describe(entry: EntryPoint) -> str:
+    """``kicked_ball = my_package.kicked_ball:KickedBall (package my-package 0.1)``."""
+    dist = getattr(entry, "dist", None)
+    where = f" (package {dist.name} {dist.version})" if dist is not None else ""
+    return f"entry point {entry.name} = {entry.value}{where} of group {ENTRY_POINT_GROUP!r}"
+
+
+def _load_entry_point(entry: EntryPoint) -> type[HybridModel]:
+    """Import one entry point and register the model it names (a class, or a module whose
+    ``@register`` registers a model of the entry point's name).
+
+    Raises
+    ------
+    UnknownModelError
+        If the entry point cannot be imported, names neither a model class nor a module that
+        registers one, or gives a model whose ``name`` is not the entry point's name.
+    """
+    from ..errors import GaitoptInputError
+
+    try:
+        target = entry.load()
+    except Exception as exc:  # the package's code: any error, said in one line
+        reason = " ".join(f"{type(exc).__name__}: {exc}".split())
+        raise UnknownModelError(
+            f"model {entry.name!r}: the {_describe(entry)} cannot be loaded ({reason}); fix or "
+            f"reinstall that package"
+        ) from exc
+    if isinstance(target, ModuleType):  # the module registers its models itself
+        if entry.name in REGISTRY:
+            return REGISTRY[entry.name]
+        raise UnknownModelError(
+            f"model {entry.name!r}: the {_describe(entry)} names a module that registers no "
+            f"model {entry.name!r}; name the class (module:Class) or decorate it with "
+            f"@gaitopt.register"
+        )
+    if isinstance(target, type) and issubclass(target, HybridModel) and target.name != entry.name:
+        raise UnknownModelError(
+            f"model {entry.name!r}: the {_describe(entry)} gives a model named "
+            f"{target.name!r}; name the entry point after the class's `name`"
+        )
+    try:
+        return register(target)
+    except GaitoptInputError as exc:
+        raise UnknownModelError(f"model {entry.name!r}: the {_describe(entry)}: {exc}") from None
+
+
+def load_entry_points() -> list[UnknownModelError]:
+    """Register every model the installed packages declare (group ``gaitopt.models``).
+
+    Returns
+    -------
+    list of UnknownModelError
+        One error per entry point that could not be loaded (see :func:`model_class`); the others
+        are registered.  ``gaitopt list`` prints them as warnings and lists the rest.
+    """
+    problems = []
+    for entry in _entry_points():
+        if entry.name in REGISTRY:
+            continue
+        try:
+            _load_entry_point(entry)
+        except UnknownModelError as exc:
+            problems.append(exc)
+    return problems
+
+
+def model_names() -> list[str]:
+    """The names :func:`model` knows: the registered models, then the installed packages'
+    entry points not loaded yet (nothing is imported)."""
+    names = list(REGISTRY)
+    for entry in _entry_points():
+        if entry.name not in names:
+            names.append(entry.name)
+    return names
+
+
+def model_class(name: str) -> type[HybridModel]:
+    """The model class registered as ``name``, loaded from an installed package's entry point
+    (group ``gaitopt.models``) if it is not registered yet.
+
+    Parameters
+    ----------
+    name : str
+        A model name (``gaitopt list`` shows them).
+
+    Returns
+    -------
+    type
+        The :class:`~gaitopt.hybrid.HybridModel` subclass.
+
+    Raises
+    ------
+    UnknownModelError
+        If ``name`` is not a str, is neither registered nor declared by an entry point, or its
+        entry point cannot be loaded (the message says which and why).
+    """
+    if not isinstance(name, str):
+        raise UnknownModelError(
+            f"`name` must be a model name (a str), got {name!r} of type {type(name).__name__}; "
+            f"available: {', '.join(model_names())}"
+        )
+    if name in REGISTRY:
+        return REGISTRY[name]
+    for entry in _entry_points():
         if entry.name == name:
-            register(entry.load())
-            return
+            return _load_entry_point(entry)
+    raise UnknownModelError(
+        f"unknown model {name!r}; {did_you_mean(name, model_names())}available: "
+        f"{', '.join(model_names())}"
+    )
 
 
 def model(name: str, **params: float) -> HybridModel:
     """Build a model by name with some parameters changed from their defaults.
 
+    Parameters
+    ----------
+    name : str
+        A registered model, or one an installed package declares in the entry-point group
+        ``gaitopt.models`` (loaded and registered on first use: :func:`model_class`).
+    **params : float
+        Parameter values; the others keep their defaults.
+
+    Returns
+    -------
+    HybridModel
+        The model instance.
+
     Raises
     ------
     UnknownModelError
-        If ``name`` is not a registered model.
+        If ``name`` is not a model (or its entry point cannot be loaded).
     ParameterError
         If a parameter is unknown, not a number, or out of range.
     """
-    if not isinstance(name, str):
-        raise UnknownModelError(
-            f"`name` must be a model name (a str), got {name!r} of type {type(name).__name__}; "
-            f"available: {', '.join(REGISTRY)}"
-        )
-    if name not in REGISTRY:
-        _from_entry_points(name)
-    if name not in REGISTRY:
-        raise UnknownModelError(
-            f"unknown model {name!r}; {did_you_mean(name, REGISTRY)}available: "
-            f"{', '.join(REGISTRY)}"
-        )
-    cls = REGISTRY[name]
+    cls = model_class(name)
     known = [s.name for s in cls.parameter_specs()]
     for key in params:
         if key not in known:
