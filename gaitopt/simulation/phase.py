@@ -5,13 +5,15 @@ the step's dense output (SciPy's ``solve_ivp`` event logic, step by step)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import casadi as ca
 import numpy as np
 
 from ..hybrid import Phase, rate_along
 from ..kernels.verify import CHECKS_PER_STEP
 
-__all__ = ["PhaseFunctions", "integrate_phase"]
+__all__ = ["PhaseFunctions", "integrate_phase", "locate_crossing"]
 
 # A guard must have been below -_ARM (in units of the guard) before it can fire.
 _ARM = 1e-10
@@ -239,6 +241,69 @@ def _rests_on_guard(funcs: PhaseFunctions, x0: np.ndarray) -> str | None:
     return None
 
 
+def locate_crossing(g: Callable[[float], float], a: float, b: float) -> float:
+    """The time in ``(a, b]`` where the signed guard ``g`` goes from negative to non-negative.
+
+    The caller has found ``g < 0`` at ``a`` and ``g >= 0`` at ``b`` (an integrator step's check
+    points, ``a`` at least the arc's last time stamp); ``g`` is evaluated on the step's dense
+    output.  The root is located by ``brentq`` (``xtol`` 1e-15, ``rtol`` 4 eps), with three
+    cases at the ends, where floating point decides:
+
+    * brentq's answer may be ``a`` itself: its tolerance (a few ulps) admits the end with the
+      smaller ``|g|``, which is ``a`` when the sign change lies within a few ulps after it.
+      That happens where a converged closed loop's event falls on an input profile's last
+      break (the step stops at the break with ``g`` at -3e-15, the crossing one ulp later: the
+      level compass optimum stabilised, after 20 orbits).  ``a`` is not the crossing
+      (``g(a) < 0``), and returning it would repeat the arc's last time stamp (an
+      ``OdeSolution`` with a zero-length piece: a ``ValueError``); the first float after ``a``
+      with ``g >= 0`` is found by bisection in floating point instead.
+    * ``g(b) < 0`` on the dense output although the caller's value at ``b`` (from the step's
+      end state, or the compiled event values) is non-negative: the sign change lies in the
+      last bits of the step, and ``b`` is the crossing.
+    * ``g(a) >= 0`` on the dense output although the caller's value there is negative: the
+      sign change lies in the first bits, and the first float after ``a`` is the crossing.
+
+    Parameters
+    ----------
+    g : callable
+        ``g(t) -> float``, the signed guard on the step's dense output.
+    a, b : float
+        The bracket, ``a < b``.
+
+    Returns
+    -------
+    float
+        The crossing time, ``a < t <= b``.
+    """
+    from scipy.optimize import brentq
+
+    if not g(b) >= 0:
+        return b
+    after = float(np.nextafter(a, np.inf))
+    if not g(a) < 0:
+        return min(after, b)
+    t = brentq(g, a, b, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
+    if t > a:
+        return float(t)
+    lo, hi = a, b  # g(lo) < 0 <= g(hi); halve until they are adjacent floats
+    while True:
+        mid = lo + 0.5 * (hi - lo)
+        if not lo < mid < hi:
+            return float(hi)
+        if g(mid) >= 0:
+            hi = mid
+        else:
+            lo = mid
+
+
+def _held(t0: float, x0: np.ndarray):
+    """A zero-length arc at ``t0`` holding ``x0`` (a phase whose first step failed)."""
+    from scipy.integrate import OdeSolution
+    from scipy.integrate._ivp.base import ConstantDenseOutput
+
+    return OdeSolution([t0, t0], [ConstantDenseOutput(t0, t0, np.asarray(x0, dtype=float))])
+
+
 # Interior points per integrator step where the guards are also checked (see
 # gaitopt.kernels.verify.CHECKS_PER_STEP).
 _CHECKS_PER_STEP = CHECKS_PER_STEP
@@ -250,9 +315,10 @@ def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_t
     A guard fires where its signed value goes from negative to non-negative after having been
     below ``-_ARM`` in this phase (strict crossings); signs are checked at the step ends and at
     ``_CHECKS_PER_STEP - 1`` interior points of each step, roots located by ``brentq`` on the
-    step's dense output."""
+    step's dense output (:func:`locate_crossing`: a time after the bracket's start, so an arc's
+    time stamps increase strictly).  An integrator failure is returned as the status
+    ``"failed"`` with the arc integrated so far."""
     from scipy.integrate import OdeSolution
-    from scipy.optimize import brentq
 
     n_tr = funcs.events
     drive = funcs.vectorised_drive()  # a feedforward evaluated at a step's times at once
@@ -278,7 +344,12 @@ def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_t
     while True:
         solver.step()
         if solver.status == "failed":
-            return OdeSolution(ts + [ts[-1]], interpolants or [None]), None, None, "failed"
+            # The arc up to the last step that succeeded (its time stamps and interpolants pair
+            # up); without one, a zero-length arc holding the start state, so that the failure
+            # is a result (status "failed") whose arc can still be sampled, not an exception.
+            if not interpolants:
+                return _held(t0, x0), None, None, "failed"
+            return OdeSolution(ts, interpolants), None, None, "failed"
         t_old, t_new = solver.t_old, solver.t
         dense = solver.dense_output()
         grid = np.linspace(t_old, t_new, _CHECKS_PER_STEP + 1)
@@ -313,13 +384,10 @@ def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_t
                     ]
                     previous, current = ends
                 if was_armed and previous < 0 <= current:
-                    t_hit = brentq(
+                    t_hit = locate_crossing(
                         lambda tt, k=k, dense=dense: funcs.signed_guard(k, dense(tt), tt),
                         grid[j - 1],
                         grid[j],
-                        xtol=1e-15,
-                        rtol=4 * np.finfo(float).eps,
-                        maxiter=200,
                     )
                     x_hit = dense(t_hit)
                     if funcs.admissible(k, x_hit, t_hit):
