@@ -56,7 +56,7 @@ def main(argv: list[str] | None = None) -> int:
 
     # 1. Continuation in the table acceleration, with the cascade.
     branch = gaitopt.continuation(
-        ball, "acceleration", to=top, bounds=(1.0, top), both_directions=True
+        ball, "acceleration", to=top, bounds=(1.0, top), both_directions=True, max_period=16
     )
     header, rows = branch.csv_rows()
     write_csv(header, rows, out / "branch.csv")

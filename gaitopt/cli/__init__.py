@@ -11,7 +11,8 @@
     gaitopt control MODEL --kind lqr|acker|deadbeat [--set ...] [--guess ...] [--target ...]
                           [--q Q] [--r R] [--poles P] [--from STATE=VALUE ...] [--json]
     gaitopt continue MODEL --param NAME --to VALUE [--set ...] [--guess ...] [--steps K]
-                           [--both] [--no-cascade] [--max-period K] [--out DIR] [--json]
+                           [--both] [--no-cascade] [--max-period K] [--step H] [--min-step H]
+                           [--max-step H] [--max-points N] [--bounds LOW:HIGH] [--out DIR] [--json]
 
 Exit status (docs/design.md, public contract): 0 gait found / simulation completed; 1 no gait found
 (the JSON is still printed, with ``success: false``) or the simulation did not complete; 2 bad

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
-from ..continuation import Branch, continuation
+from ..continuation import DEFAULT_MAX_PERIOD, Branch, PseudoArclength, continuation
 from ..errors import (
     MAX_ORBIT_STEPS,
+    GaitoptInputError,
     GuessError,
     ParameterError,
     did_you_mean,
@@ -50,10 +52,40 @@ def _continue_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--max-period",
         type=_count(1, MAX_ORBIT_STEPS, _ORBIT_LIMIT),
-        default=8,
+        default=DEFAULT_MAX_PERIOD,
         metavar="K",
-        help=f"deepest period of the period-doubling cascade (default 8, at most "
-        f"{MAX_ORBIT_STEPS})",
+        help=f"deepest period of the period-doubling cascade (default {DEFAULT_MAX_PERIOD}, at "
+        f"most {MAX_ORBIT_STEPS})",
+    )
+    # The step control (gaitopt.PseudoArclength), for branches that need smaller steps.
+    defaults = PseudoArclength()
+    steps = parser.add_argument_group("step control (pseudo-arclength)")
+    for flag, dest, what in (
+        ("--step", "step", "first arclength step"),
+        ("--min-step", "min_step", "smallest step before the branch is given up"),
+        ("--max-step", "max_step", "largest step (smaller: special points found more surely)"),
+    ):
+        steps.add_argument(
+            flag,
+            dest=f"arclength_{dest}",
+            metavar="H",
+            default=None,
+            help=f"{what} (scaled units; default {getattr(defaults, dest):g})",
+        )
+    steps.add_argument(
+        "--max-points",
+        dest="arclength_max_points",
+        type=_count(1, MAX_BRANCH_POINTS, "points per branch direction"),
+        default=None,
+        metavar="N",
+        help=f"most points per branch direction (default {defaults.max_points}, at most "
+        f"{MAX_BRANCH_POINTS})",
+    )
+    parser.add_argument(
+        "--bounds",
+        metavar="LOW:HIGH",
+        default=None,
+        help="parameter interval the branch stays in (default: the parameter's valid range)",
     )
     parser.add_argument(
         "--out",
@@ -84,6 +116,8 @@ def run_continue(args: argparse.Namespace) -> int:
     except ParameterError as exc:
         raise InputError(f"--to {args.to}: {exc}") from None
     guess = parse_guess(model, args.guess)
+    options = _arclength_options(args)
+    bounds = _bounds(args.bounds, args.param, float(getattr(model, args.param)))
     try:
         with _solver_output_to_stderr():
             branch = continuation(
@@ -95,6 +129,8 @@ def run_continue(args: argparse.Namespace) -> int:
                 both_directions=args.both,
                 cascade=not args.no_cascade,
                 max_period=args.max_period,
+                options=options,
+                bounds=bounds,
             )
     except GuessError as exc:
         raise InputError(f"{_echo('--guess', args.guess or ()) or '--guess'}: {exc}") from None
@@ -109,6 +145,48 @@ def run_continue(args: argparse.Namespace) -> int:
         print(written, file=sys.stderr)
         return EXIT_BAD_INPUT
     return EXIT_OK if branch.success else EXIT_NOT_FOUND
+
+
+#: The most points per branch direction the CLI accepts (each is a certified, simulated gait).
+MAX_BRANCH_POINTS = 10_000
+
+
+def _arclength_options(args: argparse.Namespace) -> PseudoArclength:
+    """``--step/--min-step/--max-step/--max-points`` as :class:`PseudoArclength` (defaults for
+    those not given); a value it refuses is an :class:`InputError` naming the option."""
+    given = {
+        name: _number(f"--{name.replace('_', '-')}", text, text, "0.01")
+        for name in ("step", "min_step", "max_step")
+        if (text := getattr(args, f"arclength_{name}")) is not None
+    }
+    if args.arclength_max_points is not None:
+        given["max_points"] = args.arclength_max_points
+    if "step" not in given:  # the default first step, kept inside the bounds given
+        default = PseudoArclength().step
+        given_lo, given_hi = given.get("min_step", 0.0), given.get("max_step", math.inf)
+        if not given_lo <= default <= given_hi:
+            given["step"] = min(max(default, given_lo), given_hi)
+    try:
+        return PseudoArclength(**given)
+    except GaitoptInputError as exc:
+        echo = " ".join(f"--{k.replace('_', '-')} {v:g}" for k, v in given.items())
+        raise InputError(f"{echo}: {exc}; the defaults are {PseudoArclength()}") from None
+
+
+def _bounds(text: str | None, param: str, start: float) -> tuple[float, float] | None:
+    """``--bounds LOW:HIGH`` as a pair that contains the start value."""
+    if text is None:
+        return None
+    parts = text.split(":")
+    if len(parts) != 2:
+        raise InputError(f"--bounds {text}: expected LOW:HIGH, e.g. --bounds 0.45:0.6")
+    lo, hi = (_number("--bounds", text, part, "0.45:0.6") for part in parts)
+    if not lo < start < hi:
+        raise InputError(
+            f"--bounds {text}: the interval must contain the start value {param} = {start:g}, "
+            f"with LOW < HIGH"
+        )
+    return lo, hi
 
 
 def _write_branch(branch: Branch, folder: Path) -> None:
@@ -132,3 +210,5 @@ def _print_branch(branch: Branch) -> None:
             print(
                 f"    {sp.kind:<9}{branch.param} = {sp.param:.10f}   |λ| = [{mults}]   {sp.message}"
             )
+            if sp.switch:
+                print(f"             {sp.switch}")

@@ -38,8 +38,12 @@ from ..result import LimitCycle
 from ..shooting import find_limit_cycle
 from .branch import Branch, PseudoArclength, SpecialPoint
 from .follower import Follower
+from .switching import switch_at_period_doubling
 
-__all__ = ["PseudoArclength", "SpecialPoint", "Branch", "continuation"]
+__all__ = ["PseudoArclength", "SpecialPoint", "Branch", "continuation", "DEFAULT_MAX_PERIOD"]
+
+#: The deepest period of a cascade unless asked otherwise (the Python API and the CLI alike).
+DEFAULT_MAX_PERIOD = 8
 
 #: The default step control (frozen, so one instance serves every call).
 DEFAULT_OPTIONS = PseudoArclength()
@@ -56,7 +60,7 @@ def continuation(
     both_directions: bool = False,
     bounds: tuple[float, float] | None = None,
     cascade: bool = True,
-    max_period: int = 16,
+    max_period: int = DEFAULT_MAX_PERIOD,
     verify: bool = True,
     tol: float = 1e-10,
 ) -> Branch:
@@ -88,7 +92,7 @@ def continuation(
         At each period doubling switch to the period-2k branch and follow it too (in the
         continuation direction), down the cascade until ``max_period``.
     max_period : int
-        Deepest period of the cascade.
+        Deepest period of the cascade (default :data:`DEFAULT_MAX_PERIOD`, 8).
     verify : bool
         Verify every point by independent simulation (as :func:`find_limit_cycle` does).
     tol : float
@@ -186,14 +190,13 @@ def _follow_branch(
         ]
         message = f"backward: {backward.stop}; forward: {message}"
     branch.cycles, branch.special_points, branch.message = points, specials, message
-    if cascade:
+    if cascade and branch.cycles:
+        span = (float(branch.params.min()), float(branch.params.max()))
         for sp in branch.special_points:
             if sp.kind == "PD" and 2 * branch.steps <= max_period:
-                from .switching import switch_at_period_doubling
-
-                child = switch_at_period_doubling(
+                child, sp.switch = switch_at_period_doubling(
                     sp, param, direction, to, bounds, options, verify, tol, max_period,
-                    follow=_follow_branch,
+                    follow=_follow_branch, span=span,
                 )  # fmt: skip
                 if child is not None:
                     branch.children.append(child)

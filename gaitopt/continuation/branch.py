@@ -75,6 +75,9 @@ class SpecialPoint:
         The gait at the point (for ``boundary``: the last certified gait before it).
     message : str
         What happens there.
+    switch : str
+        At a ``PD`` of a continuation with ``cascade=True``: how the switch onto the
+        period-doubled branch went (followed, or why no branch was found); empty otherwise.
     """
 
     kind: str
@@ -82,6 +85,7 @@ class SpecialPoint:
     index: int
     cycle: LimitCycle | None
     message: str
+    switch: str = ""
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready: ``kind``, ``param`` (the contract), plus the gait there."""
@@ -90,6 +94,8 @@ class SpecialPoint:
             "param": float(self.param),
             "message": self.message,
         }
+        if self.switch:
+            out["switch"] = self.switch
         if self.cycle is not None:
             out["period"] = float(self.cycle.period)
             out["steps"] = int(self.cycle.steps)
@@ -174,6 +180,11 @@ class Branch:
             out.extend(child.descendants())
         return out
 
+    def cascade(self) -> list[tuple[int, SpecialPoint]]:
+        """Every special point of this branch and its descendants, as ``(steps, point)`` pairs
+        in depth-first branch order: the period-doubling cascade read in one list."""
+        return [(b.steps, sp) for b in self.descendants() for sp in b.special_points]
+
     # -- output ---------------------------------------------------------------------------------
     def as_dict(self) -> dict[str, Any]:
         """The JSON object of ``gaitopt continue --json`` (docs/design.md's contract), with the
@@ -197,6 +208,11 @@ class Branch:
             ],
             "special_points": [sp.as_dict() for sp in self.special_points],
             "branches": [child.as_dict() for child in self.children],
+            # The flattened view: every special point of every branch, with its period.
+            "cascade": [
+                {"steps": steps, "kind": sp.kind, "param": float(sp.param)}
+                for steps, sp in self.cascade()
+            ],
         }
 
     def csv_rows(self) -> tuple[list[str], list[list[float]]]:

@@ -36,7 +36,8 @@ class Follower(SpecialPoints):
         nominal = model.nominal_input()
         self.u0 = np.asarray(first.inputs, dtype=float)
         self.du = np.zeros_like(self.u0)
-        if self.u0.size and np.allclose(self.u0, nominal, rtol=0, atol=1e-15):
+        self.nominal = bool(self.u0.size) and np.allclose(self.u0, nominal, rtol=0, atol=1e-15)
+        if self.nominal:
             h = 1e-6 * self.scale
             lam0 = float(getattr(model, param))
             try:
@@ -64,7 +65,14 @@ class Follower(SpecialPoints):
         return p
 
     def _u(self, y: np.ndarray) -> np.ndarray:
-        return self.u0 + self.du * (self.lam(y) - self.lam0)
+        """The per-step input at the point ``y``.  A nominal input that the parameter sets is
+        the model's own at that parameter, exactly (``du`` from a difference quotient is right
+        only to ~1e-10, and a gait whose input differs from its model's nominal one by that much
+        is no longer recognised as nominal downstream, e.g. by the switch at a PD)."""
+        lam = self.lam(y)
+        if self.nominal and lam != self.lam0:
+            return self.model0.replace(**{self.param: lam}).nominal_input()
+        return self.u0 + self.du * (lam - self.lam0)
 
     def jacobian(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``F(y)`` and ``[F_w, F_ℓ]`` (``F_ℓ`` through the parameter and the input it sets)."""

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import GaitoptInputError, ParameterError
 from ..result import LimitCycle
-from ..shooting import shooting_problem, solve_gait
+from ..shooting import find_limit_cycle, shooting_problem, solve_gait
 from .branch import Branch, SpecialPoint
 
 __all__ = ["doubled_unknowns", "switch_at_period_doubling"]
@@ -56,23 +56,46 @@ def born_at(doubled: LimitCycle, parent: LimitCycle) -> bool:
 
 
 def switch_at_period_doubling(
-    sp: SpecialPoint, param, direction, to, bounds, options, verify, tol, max_period, *, follow
-) -> Branch | None:
+    sp: SpecialPoint,
+    param,
+    direction,
+    to,
+    bounds,
+    options,
+    verify,
+    tol,
+    max_period,
+    *,
+    follow,
+    span=(-math.inf, math.inf),
+) -> tuple[Branch | None, str]:
     """Find the period-2k orbit born at a PD and follow it away from the PD (and down its own
     doublings) with ``follow`` (the continuation's branch follower).  It is sought first on the
-    continuation's side of the PD (a supercritical doubling), then on the other (subcritical)."""
+    continuation's side of the PD (a supercritical doubling), then on the other (subcritical),
+    at parameter values inside ``span``, the interval where the parent branch was certified (the
+    parent orbit, and with it the one born from it, stops existing beyond its boundaries).
+
+    Returns
+    -------
+    (Branch or None, str)
+        The period-2k branch (``None`` when no orbit born at the PD was found) and what happened:
+        on failure, what was tried and the last solver message, so that a caller can say why
+        there is no period-2k branch instead of leaving it out silently.
+    """
     cycle = sp.cycle
+    k2 = 2 * sp.cycle.steps if sp.cycle is not None else 2
     if cycle is None or not cycle.success or cycle.problem is None:
-        return None
+        return None, f"no period-{k2} branch: the gait at the PD is not a certified gait"
     problem, w2, null = doubled_unknowns(cycle)
     nominal = np.allclose(cycle.inputs, cycle.model.nominal_input(), rtol=0, atol=1e-15)
     lam_pd = sp.param
+    tried, last = 0, "no parameter value next to the PD lies in the allowed range"
     for side in (direction, -direction):
         for offset in OFFSETS:
             lam = lam_pd + side * offset * max(abs(lam_pd), 1e-3)
             if to is not None and side == direction and (lam - to) * direction > 0:
                 continue
-            if not bounds[0] <= lam <= bounds[1]:
+            if not (bounds[0] <= lam <= bounds[1] and span[0] <= lam <= span[1]):
                 continue
             try:
                 model = cycle.model.replace(**{param: lam})
@@ -81,23 +104,69 @@ def switch_at_period_doubling(
             # A model whose nominal input is set by the parameter (SLIP) keeps it nominal.
             u = model.nominal_input() if nominal else np.asarray(cycle.inputs, dtype=float)
             for amplitude in AMPLITUDES:
-                w0 = w2 + amplitude * math.sqrt(offset) * null
-                try:
-                    doubled = solve_gait(model, problem, w0, u, verify=verify, tol=tol)
-                except GaitoptInputError:
-                    continue
-                if doubled.success and born_at(doubled, cycle):
-                    return follow(
-                        doubled,
-                        param,
-                        side,
-                        to if side == direction else None,
-                        bounds,
-                        options,
-                        False,
-                        True,
-                        max_period,
-                        verify,
-                        tol,
+                eps = amplitude * math.sqrt(offset)
+                for doubled in _candidates(cycle, model, problem, w2, null, eps, u, verify, tol):
+                    tried += 1
+                    if isinstance(doubled, str):
+                        last = doubled
+                        continue
+                    if doubled.success and born_at(doubled, cycle):
+                        break
+                    last = (
+                        doubled.message
+                        if not doubled.success
+                        else f"the period-{k2} orbit found at {param} = {lam:.10g} was not born "
+                        f"at the PD (too far from the parent orbit, or no multiplier near +1)"
                     )
-    return None
+                else:
+                    continue
+                child = follow(
+                    doubled,
+                    param,
+                    side,
+                    to if side == direction else None,
+                    bounds,
+                    options,
+                    False,
+                    True,
+                    max_period,
+                    verify,
+                    tol,
+                )
+                return child, (
+                    f"period-{k2} branch followed from {param} = {lam:.10g} "
+                    f"({len(child.cycles)} gaits)"
+                )
+    return None, (
+        f"no period-{k2} branch found: {tried} starts along the PD's null vector (Newton from "
+        f"the doubled orbit, and simulations from the displaced section point; parameter offsets "
+        f"{', '.join(f'{o:g}' for o in OFFSETS)} relative, on both sides) failed; the last: "
+        f"{last}. Try `gaitopt solve {cycle.model.name} --steps {k2}` with a "
+        f"guess past the PD, or a smaller --max-step"
+    )
+
+
+def _candidates(cycle, model, problem, w2, null, eps, u, verify, tol):
+    """The period-2k orbits tried at one parameter value and amplitude ``eps`` (a generator, so
+    the second is computed only if the first is not the orbit sought), each a
+    :class:`LimitCycle` or, where the start is refused, the reason as a string.
+
+    1. Newton from the doubled parent orbit plus ``eps`` times the null vector: no simulation,
+       but the null vector's duration components can be far larger than its section ones (SLIP:
+       tens of seconds per metre of apex height), so this start may run backwards in time.
+    2. The usual search from the section point displaced by ``±eps`` times the null vector's
+       section part: its unknowns come from a simulation, so the durations are consistent.
+    """
+    try:
+        yield solve_gait(model, problem, w2 + eps * null, u, verify=verify, tol=tol)
+    except GaitoptInputError as exc:
+        yield str(exc)
+    m = len(cycle.section_point)
+    for sign in (1.0, -1.0):  # the orbit visits both sides; one may leave the map's domain
+        guess = dict(zip(cycle.section_coordinates, cycle.section_point + sign * eps * null[:m]))
+        try:
+            yield find_limit_cycle(
+                model, guess, steps=problem.cycles, inputs=u, follow=False, verify=verify, tol=tol
+            )
+        except GaitoptInputError as exc:
+            yield str(exc)
