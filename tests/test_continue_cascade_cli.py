@@ -59,9 +59,7 @@ def test_a_failed_switch_says_why():
     """A PD whose period-2k orbit is not searched for (max_period reached) has no switch note;
     one that is searched and not found says what was tried (here: the period-2 SLIP branch ends
     5e-5 rad past its own PD, so the period-4 orbit has no room to be born)."""
-    branch = gaitopt.continuation(
-        gaitopt.model("slip"), "touchdown_angle", to=0.5, max_period=4
-    )
+    branch = gaitopt.continuation(gaitopt.model("slip"), "touchdown_angle", to=0.5, max_period=4)
     [child] = branch.children
     notes = [sp.switch for sp in child.special_points if sp.kind == "PD"]
     assert notes and all(note for note in notes)

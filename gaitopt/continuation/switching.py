@@ -163,7 +163,8 @@ def _candidates(cycle, model, problem, w2, null, eps, u, verify, tol):
         yield str(exc)
     m = len(cycle.section_point)
     for sign in (1.0, -1.0):  # the orbit visits both sides; one may leave the map's domain
-        guess = dict(zip(cycle.section_coordinates, cycle.section_point + sign * eps * null[:m]))
+        shifted = cycle.section_point + sign * eps * null[:m]
+        guess = dict(zip(cycle.section_coordinates, shifted, strict=True))
         try:
             yield find_limit_cycle(
                 model, guess, steps=problem.cycles, inputs=u, follow=False, verify=verify, tol=tol
