@@ -351,3 +351,16 @@ def test_curved_foot_walker_is_drawn_stepping_on_the_slope(curved):
     outline = frames[0]["outline"]
     height = outline[1] + outline[0] * math.tan(model.slope)
     assert np.nanmin(height) == pytest.approx(0.0, abs=5e-3)  # the arc is drawn in 13 samples
+
+
+def test_a_period_one_gait_steeper_than_the_continued_family():
+    """The README's slope bounds (0.1208445 rad with any stability) belong to the family
+    continued from the default gait, not to the model: at slope 0.15 a multi-start finds another
+    verified period-1 gait.  Numbers from `gaitopt solve kneed_walker --set slope=0.15 --starts
+    16` (issue 25, confirmed independently there: it closes to 1.6e-12 and its trailing foot
+    lifts off and clears the slope); period to 1e-8 s (the solve's residual is 1e-13, its
+    discretisation error 1e-11), the multiplier to 1e-6."""
+    gait = gaitopt.find_limit_cycle(gaitopt.model("kneed_walker", slope=0.15), starts=16)
+    assert gait.success and gait.verified and not gait.stable
+    assert gait.period == pytest.approx(0.4124066926, abs=1e-8)
+    assert float(np.max(np.abs(gait.multipliers))) == pytest.approx(10.09965743, abs=1e-6)
