@@ -149,6 +149,9 @@ def plot_return_map(
     for stable in (True, False):
         xs = [x for x, _ in points[stable]]
         kind = "stable" if stable else "unstable"
+        # The values go into the legend, not beside the markers: fixed points close together
+        # (the SLIP's 0.877 and 0.917 m) would print their labels over each other.
+        values_text = "; ".join(f"{x:.6g} (λ = {lam.real:.3g})" for x, lam in points[stable])
         ax.plot(
             xs,
             xs,
@@ -157,17 +160,9 @@ def plot_return_map(
             color="k",
             mfc="k" if stable else "white",
             zorder=5,
-            label=f"{kind} fixed point" if xs else None,
+            label=f"{kind} fixed point {values_text}" if xs else None,
             gid=f"{kind} fixed points",
         )
-        for x, lam in points[stable]:
-            ax.annotate(
-                f" {x:.6g}\n λ = {lam.real:.3g}",
-                (x, x),
-                xytext=(8, -22),
-                textcoords="offset points",
-                fontsize=8,
-            )
 
     finite = values[np.isfinite(values)]
     top = max(hi, float(finite.max()) if finite.size else hi)
