@@ -278,3 +278,25 @@ def test_drawn_handovers_land_on_the_drawn_ground(walker):
     moved = end["mass"][:, 0] - start["mass"][:, 0]
     assert moved[0] > 0.05
     assert moved[1] == pytest.approx(-moved[0] * math.tan(walker.slope), abs=1e-9)
+
+
+def test_the_animation_draws_the_linkage(walker):
+    """The GIF shows the machine, not spokes: every phase declares all joints of the twelve legs
+    and the drawing has each leg's ten rods and its crank.  Rigid rods are an invariant of the
+    drawing: each drawn rod is its holy number × 0.01 m long (Jansen 2007; gaitopt.linkage) to
+    1e-12 m, at any crank angle; the stance foot is drawn at the contact (the origin)."""
+    from gaitopt.models.strandbeest import RODS
+
+    lengths = JansenLinkage().params
+    assert len(walker.drawing) == 12 * (len(RODS) + 1)
+    for phase in walker.phases:
+        for theta in (0.3, 1.7, 4.0):
+            pts = np.asarray(phase.points(np.array([theta, 2.0]), walker.p))
+            at = {name: pts[:, i] for i, name in enumerate(phase.point_names)}
+            np.testing.assert_allclose(at["foot"], 0.0, atol=1e-15)
+            for leg in range(12):
+                for a, b, letter in RODS:
+                    length = np.linalg.norm(at[f"leg{leg}_{a}"] - at[f"leg{leg}_{b}"])
+                    assert length == pytest.approx(lengths[letter], abs=1e-12)
+                crank = np.linalg.norm(at[f"leg{leg}_pin"] - at["axle"])
+                assert crank == pytest.approx(lengths["m"], abs=1e-12)

@@ -340,9 +340,17 @@ class Strandbeest(HybridModel):
     reference = "Jansen 2007; Deits, Drake examples/multibody/strandbeest; Tedrake, rimless wheel"
     mesh = (3, 4)
     state_units = {"theta": "rad", "theta_dot": "rad/s"}  # for axis labels
-    #: The drawing: the stance foot and the next and previous feet as spokes from the crank axle
-    #: (the generalised rimless wheel; the linkage's own figures are the study's).
-    drawing = (("foot", "axle", "next_foot"), ("axle", "previous_foot"))
+    #: The drawing: every rod of the twelve legs (:data:`RODS`) and each pair's crank, through
+    #: the joints ``leg{i}_{joint}`` that each phase declares (legs 0–5 at θ + φ, 6–11 their
+    #: mirror images), so that the animation shows the linkage itself.
+    drawing = tuple(
+        line
+        for i in range(12)
+        for line in (
+            *((f"leg{i}_{a}", f"leg{i}_{b}") for a, b, _ in RODS),
+            ("axle", f"leg{i}_pin"),
+        )
+    )
 
     slope: float = parameter(
         0.02,
@@ -415,6 +423,17 @@ class Strandbeest(HybridModel):
         rotation = ca.vertcat(
             ca.horzcat(-ca.cos(gamma), ca.sin(gamma)), ca.horzcat(ca.sin(gamma), ca.cos(gamma))
         )
+        # Every joint of the twelve legs relative to the crank axle (the drawing; legs 0–5 at
+        # pin angle θ + φ, 6–11 mirrored about the vertical, as in _machine).
+        reflect = ca.DM([-1.0, 1.0])
+        legs, joint_names = [], []
+        for i, (mirror, ph) in enumerate(
+            (mirror, ph) for mirror in (False, True) for ph in _linkage().SIX_PAIR_PHASES
+        ):
+            pts = _leg()(math.pi - theta - ph if mirror else theta + ph)
+            for j, joint in enumerate(_POINTS[1:], start=1):  # the axle is drawn once
+                legs.append(reflect * pts[:, j] if mirror else pts[:, j])
+                joint_names.append(f"leg{i}_{joint}")
         phases = []
         for k in range(K):
             s, nxt, prv = feet_seq[k], feet_seq[(k + 1) % K], feet_seq[(k - 1) % K]
@@ -481,10 +500,11 @@ class Strandbeest(HybridModel):
             foot = here["F"][:, s]
             drawn = [
                 ca.mtimes(rotation, v - foot)
-                for v in (ca.DM.zeros(2, 1), ahead["F"][:, nxt], behind["F"][:, prv])
+                for v in (foot, ahead["F"][:, nxt], behind["F"][:, prv])
             ]
+            joints = [ca.mtimes(rotation, v - foot) for v in legs]
             points = ca.Function("points", [x, p], [ca.horzcat(-ca.mtimes(rotation, foot),
-                                                               *drawn)])  # fmt: skip
+                                                               *drawn, *joints)])  # fmt: skip
             phases.append(
                 Phase(
                     f"support {k + 1} (foot {s})",
@@ -493,7 +513,7 @@ class Strandbeest(HybridModel):
                     (forward, backward),
                     {"energy": energy},
                     points=points,
-                    point_names=("axle", "foot", "next_foot", "previous_foot"),
+                    point_names=("axle", "foot", "next_foot", "previous_foot", *joint_names),
                     constraints=(push,),
                 )
             )
