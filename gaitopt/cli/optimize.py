@@ -11,13 +11,17 @@
 ``--json`` prints one object: ``model``, ``params``, ``success``, ``message``, ``cost_kind``,
 ``cost``, ``period``, ``step_length``, ``speed``, ``fixed_point``, ``inputs`` (``{"time": [...],
 INPUT: [...]}`` over one orbit), ``multipliers`` (``[re, im]``), ``stable``, ``verified``,
-``discretisation_error``, ``active_constraints`` and, with ``--starts`` > 1, ``minima``.  Bounds
-the model declares (``input_bounds``, ``state_bounds``: the five-link biped's |u| ≤ 100 N·m,
-|q| ≤ π/2, |q̇| ≤ 10) apply unless ``--bound`` overrides an input's: ``--bound INPUT=MAX`` for
-|u| ≤ MAX (0 switches the input off), ``--bound INPUT=LOW:HIGH`` for LOW ≤ u ≤ HIGH (within what
-the model declares: Kuo's push-off only pushes).  ``--out DIR`` writes
+``discretisation_error``, ``active_constraints`` and, with ``--starts`` > 1, ``minima`` and
+``starts``.  Bounds the model declares (``input_bounds``, ``state_bounds``: the five-link
+biped's |u| ≤ 100 N·m, |q| ≤ π/2, |q̇| ≤ 10) apply unless ``--bound`` overrides an input's:
+``--bound INPUT=MAX`` for |u| ≤ MAX (0 switches the input off), ``--bound INPUT=LOW:HIGH`` for
+LOW ≤ u ≤ HIGH (within what the model declares: Kuo's push-off only pushes).  ``--out DIR`` writes
 ``optimal.json``, ``inputs.csv``, ``orbit.png``, ``inputs.png`` and ``gait.gif``.  Exit status
 0 optimal gait found and verified, 1 none (the JSON is still printed), 2 bad input.
+
+With ``--starts`` > 1 the JSON's ``starts`` lists every start's outcome (``converged`` to the
+minimum at index ``minimum``, ``not_converged`` or ``no_start``, with its ``message``): a start
+that cannot begin or fails is recorded and the search goes on.
 
 ``--scheduler local`` (or a Dask address) runs the ``--starts`` on Dask
 (:func:`gaitopt.optimize.library.dask_starts`; the same minima as the serial run).
@@ -289,6 +293,9 @@ def _print(report: dict[str, Any]) -> None:
     ]
     for i, m in enumerate(report.get("minima", [])):
         rows.append((f"minimum {i + 1}", f"cost {m['cost']:.10g}, starts {m['starts']}"))
+    for s in report.get("starts", []):  # the starts that reached no minimum, and why
+        if s["status"] != "converged":
+            rows.append((f"start {s['start']}", f"{s['status']}: {s['message']}"))
     st = report.get("stabilisation")
     if st is not None:
         rows.append(("stabilised", st["success"]))

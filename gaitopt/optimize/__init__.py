@@ -6,7 +6,8 @@
 * :mod:`~gaitopt.optimize.solve` — IPOPT with exact derivatives, multi-start, mesh refinement;
 * :mod:`~gaitopt.optimize.verify` and :mod:`~gaitopt.optimize.floquet` — trust: dense checks,
   independent simulation, multipliers two ways;
-* :mod:`~gaitopt.optimize.result` — :class:`OptimalGait`;
+* :mod:`~gaitopt.optimize.result` — :class:`OptimalGait` (with every distinct minimum of a
+  multi-start, :class:`Minimum`, and every start's outcome, :class:`StartRecord`);
 * :mod:`~gaitopt.optimize.stabilisation` — :func:`stabilise`: a per-step input offset (LQR)
   that stabilises an unstable optimum, checked in simulation;
 * :mod:`~gaitopt.optimize.library` — libraries of optima continued in a constraint (folds,
@@ -19,7 +20,7 @@ from .collocation import Arc, Collocation, RadauMesh
 from .library import GaitLibrary, gait_library
 from .problem import COSTS, GaitProblem
 from .profile import InputProfile
-from .result import Minimum, OptimalGait
+from .result import Minimum, OptimalGait, StartRecord
 from .solve import optimize_gait, solve_problem
 from .stabilisation import Stabilisation, stabilise
 
@@ -33,6 +34,7 @@ __all__ = [
     "InputProfile",
     "OptimalGait",
     "Minimum",
+    "StartRecord",
     "COSTS",
     "stabilise",
     "Stabilisation",

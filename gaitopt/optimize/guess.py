@@ -1,14 +1,31 @@
 """Starting points of the gait optimisation: a simulation from a seeded start with an input
-profile, or a previous optimum (warm start) interpolated onto another transcription."""
+profile, or a previous optimum (warm start) interpolated onto another transcription.
+
+A start whose perturbed section point is not a state of the model (the five-link biped's
+section lift takes an arccos, undefined for some perturbations: start 13 of seed 0 at OptimTraj's
+statement) cannot begin: :class:`NoStart` says why, and the multi-start records it as that
+start's outcome and goes on (:func:`gaitopt.optimize.solve.attempt`).
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
+from ..errors import GaitoptInputError
 from ..simulation import simulate
 from .collocation import Collocation
 from .problem import GaitProblem
 from .result import OptimalGait
+
+
+class NoStart(Exception):
+    """A start of the multi-start from which no guess can be built (its section point lifts to
+    no state of the model, or its simulation cannot begin there); the message says why.  Not an
+    input error: the start is generated, not given, and is recorded as failed."""
+
+
+def _shown(names: tuple[str, ...] | list[str], values: np.ndarray) -> str:
+    return ", ".join(f"{n}={v:.6g}" for n, v in zip(names, values, strict=False))
 
 
 def _guess_from_simulation(
@@ -17,15 +34,24 @@ def _guess_from_simulation(
     model = problem.model
     p = model.p
     n_u = len(model.inputs)
-    sim = simulate(model, model.lift(s0), steps=problem.steps, max_phase_time=5.0)
+    x0 = model.lift(s0)
+    if not np.all(np.isfinite(x0)):
+        raise NoStart(
+            f"its section point ({_shown(model.section.coordinates, s0)}) is not a state of "
+            f"{model.name}: the section's lift is undefined there ({model.section.doc})"
+        )
+    try:
+        sim = simulate(model, x0, steps=problem.steps, max_phase_time=5.0)
+    except GaitoptInputError as exc:  # a generated state the simulator refuses (overflow)
+        raise NoStart(f"its simulation cannot begin: {exc}") from None
     arcs = sim.arcs
     chain = col.chain
     states, durations = [], []
     for k, i in enumerate(chain):
         arc = arcs[k] if k < len(arcs) and arcs[k].phase == i else None
         if arc is None or not arc.t1 > arc.t0:
-            x0 = model.lift(s0) if i == 0 else np.zeros(model.phases[i].n)
-            states.append(lambda t, x0=x0: np.tile(x0[:, None], (1, np.size(t))))
+            held = x0 if i == 0 else np.zeros(model.phases[i].n)
+            states.append(lambda t, held=held: np.tile(held[:, None], (1, np.size(t))))
             durations.append(0.5)
         else:
             states.append(

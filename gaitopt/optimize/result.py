@@ -9,7 +9,14 @@ import numpy as np
 
 from ..files import jsonable
 
-__all__ = ["OptimalGait", "Minimum"]
+__all__ = ["OptimalGait", "Minimum", "StartRecord", "START_STATUS"]
+
+#: How one start of a multi-start ended (:attr:`StartRecord.status`).
+START_STATUS = {
+    "converged": "IPOPT converged on the starts' mesh; the start is one of a minimum's starts",
+    "not_converged": "IPOPT stopped without converging (the message names the worst constraint)",
+    "no_start": "no guess could be built: the perturbed start is not a state of the model",
+}
 
 
 @dataclass
@@ -63,6 +70,47 @@ class Minimum:
 
 
 @dataclass
+class StartRecord:
+    """How one start of a multi-start ended; every start has one, failed or not.
+
+    Attributes
+    ----------
+    start : int
+        The start's index (0: the model's default start or the warm start).
+    status : str
+        ``"converged"``, ``"not_converged"`` or ``"no_start"`` (:data:`START_STATUS`).
+    message : str
+        Why it failed, or what it reached.
+    cost : float or None
+        Its cost on the starts' mesh where IPOPT converged.
+    minimum : int or None
+        The index in :attr:`OptimalGait.minima` of the minimum it reached (0-based).
+    iterations : int
+        IPOPT iterations (0 for a start that could not begin).
+    """
+
+    start: int
+    status: str
+    message: str = ""
+    cost: float | None = None
+    minimum: int | None = None
+    iterations: int = 0
+
+    def to_json(self) -> dict[str, Any]:
+        """Plain JSON types."""
+        return jsonable(
+            {
+                "start": self.start,
+                "status": self.status,
+                "message": self.message,
+                "cost": self.cost,
+                "minimum": self.minimum,
+                "iterations": self.iterations,
+            }
+        )
+
+
+@dataclass
 class OptimalGait:
     """An optimal gait, or the record of a failed optimisation.
 
@@ -110,6 +158,9 @@ class OptimalGait:
         Constraints and bounds active at the optimum.
     minima : list of Minimum
         Distinct local minima of a multi-start, best first.
+    starts : list of StartRecord
+        How every start ended, in start order: converged (to which minimum), not converged, or
+        unable to begin; a failed start never ends the search.
     params : dict of str to float
         Parameters (free ones optimised).
     solve_time : float
@@ -139,6 +190,7 @@ class OptimalGait:
     discretisation: dict[str, Any] = field(default_factory=dict)
     active_constraints: list[str] = field(default_factory=list)
     minima: list[Minimum] = field(default_factory=list)
+    starts: list[StartRecord] = field(default_factory=list)
     params: dict[str, float] = field(default_factory=dict)
     solve_time: float = 0.0
     iterations: int = 0
@@ -153,8 +205,8 @@ class OptimalGait:
         return self.profiles[step % len(self.profiles)](t)
 
     def to_json(self, *, minima: bool | None = None) -> dict[str, Any]:
-        """The ``gaitopt optimize --json`` object (``minima`` included when there are more
-        starts than one, or when asked)."""
+        """The ``gaitopt optimize --json`` object (``minima`` and ``starts`` included when
+        there are more starts than one, or when asked)."""
         data: dict[str, Any] = {
             "model": self.model.name,
             "params": self.params or self.model.params,
@@ -182,8 +234,9 @@ class OptimalGait:
         }
         if minima or (minima is None and len(self.minima) > 0 and self._multistart):
             data["minima"] = [m.to_json() for m in self.minima]
+            data["starts"] = [s.to_json() for s in self.starts]
         return jsonable(data)
 
     @property
     def _multistart(self) -> bool:
-        return sum(len(m.starts) for m in self.minima) > 1 or len(self.minima) > 1
+        return len(self.starts) > 1 or len(self.minima) > 1

@@ -25,9 +25,9 @@ from .active import _active, _violation
 from .arcs import _describe, detect_structure, structure_of
 from .certify import _certify
 from .collocation import Arc, Collocation, RadauMesh
-from .guess import _start_guess
+from .guess import NoStart, _start_guess
 from .problem import GaitProblem, as_problem
-from .result import Minimum, OptimalGait
+from .result import Minimum, OptimalGait, StartRecord
 
 __all__ = ["optimize_gait", "solve_problem", "DEFAULT_MESH"]
 
@@ -100,7 +100,9 @@ def optimize_gait(
         Number of seeded starts (start 0 from the model's default start, start ``j`` perturbed
         with ``numpy.random.default_rng([seed, j])``), or the indices of the starts to run (to
         re-run a given start alone); every distinct local minimum is reported in ``minima``
-        with the starts that reached it.
+        with the starts that reached it, and every start's outcome in ``starts``: a start that
+        cannot begin (its perturbed section point is not a state of the model) or does not
+        converge is recorded with its reason, and the search goes on.
     seed : int
         Seed of the multi-start.
     mesh : RadauMesh, optional
@@ -233,19 +235,61 @@ def _converged(stats: dict[str, Any]) -> bool:
 def attempt(
     col: Collocation, problem: GaitProblem, start: int, seed: int, guess: OptimalGait | None
 ) -> dict[str, Any]:
-    """One start of the multi-start on the initial mesh: ``{"start", "w", "stats", "ok"}`` and
-    ``cost``, ``s``, ``period`` if IPOPT converged, else ``violation`` (worst group, size)."""
+    """One start of the multi-start on the initial mesh: ``{"start", "w", "stats", "ok",
+    "status", "reason"}`` and ``cost``, ``s``, ``period`` if IPOPT converged, else
+    ``violation`` (worst group, size).
+
+    A start that cannot begin (:class:`~gaitopt.optimize.guess.NoStart`: its perturbed section
+    point is not a state of the model) is returned as such, ``status`` ``"no_start"``, with
+    ``w`` all NaN and no violation, never raised: one start does not end a multi-start.
+    """
     p = problem.model.p
-    w0 = _start_guess(col, problem, start, seed, guess)
+    try:
+        w0 = _start_guess(col, problem, start, seed, guess)
+    except NoStart as exc:
+        return {
+            "start": start,
+            "w": np.full(np.size(col.lbx), np.nan),
+            "stats": {},
+            "ok": False,
+            "status": "no_start",
+            "reason": f"start {start} could not begin: {exc}",
+            "violation": ("no start", float("inf")),
+        }
     w, stats = _run(col, w0, p)
     ok = bool(_converged(stats) and np.all(np.isfinite(w)))
     entry: dict[str, Any] = {"start": start, "w": w, "stats": stats, "ok": ok}
     if ok:
         sol = col.unpack(w, p)
-        entry.update(cost=sol["cost"], s=sol["s"], period=sol["period"])
+        entry.update(cost=sol["cost"], s=sol["s"], period=sol["period"], status="converged")
+        entry["reason"] = f"start {start} converged (cost {sol['cost']:.10g} on the starts' mesh)"
     else:
-        entry["violation"] = _violation(col, w, p)
+        name, size = entry["violation"] = _violation(col, w, p)
+        entry["status"] = "not_converged"
+        entry["reason"] = (
+            f"start {start} did not converge: IPOPT stopped ({stats.get('return_status')}) with "
+            f"the constraint '{name}' violated by {size:.3g}"
+        )
     return entry
+
+
+def _start_records(runs: list[dict[str, Any]], minima: list[dict[str, Any]]) -> list[StartRecord]:
+    """Every start's outcome, in start order (the minimum it reached, by index)."""
+    where = {start: k for k, m in enumerate(minima) for start in m["starts"]}
+    records = []
+    for run in runs:
+        status = run.get("status") or ("converged" if run["ok"] else "not_converged")
+        records.append(
+            StartRecord(
+                int(run["start"]),
+                status,
+                run.get("reason", ""),
+                float(run["cost"]) if run["ok"] else None,
+                where.get(run["start"]),
+                int(run["stats"].get("iter_count", 0)),
+            )
+        )
+    return records
 
 
 def solve_problem(
@@ -264,8 +308,8 @@ def solve_problem(
     model = problem.model
     p = model.p
     mesh = mesh or DEFAULT_MESH
-    col = _collocation(problem, mesh)
     indices = _start_indices(starts)
+    col = _collocation(problem, mesh)
     if scheduler is not None:  # the same attempts, on Dask workers
         from .library import dask_starts
 
@@ -286,8 +330,26 @@ def solve_problem(
     minima.sort(key=lambda m: m["cost"])
 
     common = dict(model=model, cost_kind=problem.cost_kind, problem=problem.describe())
+    records = _start_records(runs, minima)
+    not_begun = [r for r in runs if r.get("status") == "no_start"]
+    tally = (
+        f" ({len(not_begun)} of {len(runs)} starts could not begin: "
+        f"{', '.join(str(r['start']) for r in not_begun)})"
+        if not_begun
+        else ""
+    )
     if not minima:
-        best = min(runs, key=lambda r: r["violation"][1])
+        solved = [r for r in runs if r.get("status") != "no_start"]
+        if not solved:
+            return OptimalGait(
+                False,
+                f"no start could begin: {'; '.join(r['reason'] for r in runs)}; try other starts "
+                f"(another seed) or parameters where the model's default start is a state",
+                solve_time=time.perf_counter() - t_start,
+                starts=records,
+                **common,
+            )
+        best = min(solved, key=lambda r: r["violation"][1])
         name, size = best["violation"]
         active = _active(col, best["w"], p)
         bound_note = (
@@ -299,9 +361,10 @@ def solve_problem(
             False,
             f"no gait meets the constraints: IPOPT stopped ({best['stats'].get('return_status')})"
             f" with the constraint '{name}' violated by {size:.3g}{bound_note}; relax it "
-            f"(a larger input bound, a shorter step, a longer period)",
+            f"(a larger input bound, a shorter step, a longer period){tally}",
             solve_time=time.perf_counter() - t_start,
             iterations=int(best["stats"].get("iter_count", 0)),
+            starts=records,
             **common,
         )
 
@@ -319,12 +382,14 @@ def solve_problem(
             f"not certified: {results[0].message}"
         )
     result.minima = [_minimum(model, m, r) for m, r in zip(minima, results, strict=True)]
+    result.starts = records
     if len(runs) > 1:
         certified = sum(r.success for r in results)
+        unsolved = sum(r.get("status") == "not_converged" for r in runs)
+        begun = f"{len(not_begun)} could not begin, " if not_begun else ""
         result.message += (
             f"; {len(minima)} distinct local minim{'um' if len(minima) == 1 else 'a'} from "
-            f"{len(runs)} starts ({sum(not r['ok'] for r in runs)} did not converge; "
-            f"{certified} certified)"
+            f"{len(runs)} starts ({begun}{unsolved} did not converge; {certified} certified)"
         )
     result.solve_time = time.perf_counter() - t_start
     return result

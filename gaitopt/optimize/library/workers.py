@@ -93,6 +93,8 @@ def start_task(point: Mapping[str, Any]) -> dict[str, Any]:
     out = {
         "start": entry["start"],
         "ok": entry["ok"],
+        "status": entry["status"],
+        "reason": entry["reason"],
         "w": entry["w"].tolist(),
         "stats": {
             "success": bool(stats.get("success")),
