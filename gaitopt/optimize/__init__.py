@@ -8,6 +8,8 @@
   independent simulation, multipliers two ways;
 * :mod:`~gaitopt.optimize.result` — :class:`OptimalGait` (with every distinct minimum of a
   multi-start, :class:`Minimum`, and every start's outcome, :class:`StartRecord`);
+* :mod:`~gaitopt.optimize.guess` — the starts, and :class:`WarmStartError` for a ``guess`` that
+  cannot warm start;
 * :mod:`~gaitopt.optimize.stabilisation` — :func:`stabilise`: a per-step input offset (LQR)
   that stabilises an unstable optimum, checked in simulation;
 * :mod:`~gaitopt.optimize.library` — libraries of optima continued in a constraint (folds,
@@ -17,6 +19,7 @@
 from __future__ import annotations
 
 from .collocation import Arc, Collocation, RadauMesh
+from .guess import WarmStartError
 from .library import GaitLibrary, gait_library
 from .problem import COSTS, GaitProblem
 from .profile import InputProfile
@@ -35,6 +38,7 @@ __all__ = [
     "OptimalGait",
     "Minimum",
     "StartRecord",
+    "WarmStartError",
     "COSTS",
     "stabilise",
     "Stabilisation",

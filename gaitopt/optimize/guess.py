@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import GaitoptInputError
+from ..errors import GaitoptInputError, GuessError
 from ..simulation import simulate
 from .collocation import Collocation
 from .problem import GaitProblem
@@ -76,6 +76,54 @@ def _guess_from_simulation(
 
     free = np.array([model.params[n] for n in problem.free])
     return col.pack(s0, free, states, [inputs] * len(chain), durations, p)
+
+
+class WarmStartError(GuessError):
+    """A ``guess`` (warm start) of :func:`gaitopt.optimize_gait` that cannot start it: not an
+    :class:`OptimalGait`, a failed result with no orbit (IPOPT found no solution to start from),
+    or the optimum of another model or number of steps."""
+
+
+def check_warm_start(problem: GaitProblem, guess: object) -> None:
+    """``guess`` must be ``None`` or an :class:`OptimalGait` with an orbit of ``problem``'s
+    model and phases (a certified optimum, or a converged one its checks rejected).
+
+    Raises
+    ------
+    WarmStartError
+        Naming ``guess``, what is wrong with it and what to pass instead.
+    """
+    if guess is None:
+        return
+    model = problem.model
+    if not isinstance(guess, OptimalGait):
+        raise WarmStartError(
+            f"`guess` must be an OptimalGait (a result of gaitopt.optimize_gait) or None, got "
+            f"{type(guess).__name__} {guess!r:.80}; pass a previous optimum, e.g. "
+            f"guess=optimize_gait(model, period=0.8, step_length=0.3), or leave it out"
+        )
+    if not guess.orbit:
+        reason = guess.message.split(";")[0] if guess.message else "no message"
+        raise WarmStartError(
+            f"`guess` is a failed OptimalGait (success=False: {reason}) with no orbit to warm "
+            f"start from; pass a result with an orbit (check `gait.orbit`, e.g. one with "
+            f"success=True), or guess=None for a cold start"
+        )
+    name = getattr(guess.model, "name", None)
+    if name != model.name:
+        raise WarmStartError(
+            f"`guess` is an optimum of {name!r}, not of {model.name!r}; pass an optimum of "
+            f"{model.name}, or guess=None for a cold start"
+        )
+    chain = problem.chain
+    phases = [getattr(arc, "phase", None) for arc in guess.orbit]
+    if phases != chain:
+        steps = len(guess.orbit) // max(len(model.phases), 1)
+        raise WarmStartError(
+            f"`guess` has an orbit of {len(guess.orbit)} phase(s) ({steps} step(s)), the problem "
+            f"{len(chain)} ({problem.steps} step(s)); pass an optimum with steps="
+            f"{problem.steps}, or guess=None for a cold start"
+        )
 
 
 def _guess_from_gait(col: Collocation, gait: OptimalGait) -> np.ndarray:

@@ -25,7 +25,7 @@ from .active import _active, _violation
 from .arcs import _describe, detect_structure, structure_of
 from .certify import _certify
 from .collocation import Arc, Collocation, RadauMesh
-from .guess import NoStart, _start_guess
+from .guess import NoStart, _start_guess, check_warm_start
 from .problem import GaitProblem, as_problem
 from .result import Minimum, OptimalGait, StartRecord
 
@@ -113,7 +113,8 @@ def optimize_gait(
     verify : bool
         Re-simulate the optimum and compute the multipliers (always, unless False for speed).
     guess : OptimalGait, optional
-        A previous optimum to warm start from (a library of gaits).
+        A previous optimum to warm start from (a library of gaits): a result with an orbit of
+        the same model and steps (a certified optimum, or a converged one its checks rejected).
     scheduler : str, optional
         Run the starts on Dask (``"local"``: a local cluster; or a scheduler address), as
         :func:`gaitopt.sweep.sweep` does (:func:`gaitopt.optimize.library.dask_starts`); the
@@ -122,6 +123,13 @@ def optimize_gait(
     Returns
     -------
     OptimalGait
+
+    Raises
+    ------
+    GaitoptInputError
+        Bad input, before any work: a statement with no optimum (positive work without input
+        bounds), a ``guess`` that cannot warm start
+        (:class:`~gaitopt.optimize.guess.WarmStartError`).
     """
     problem = as_problem(
         model,
@@ -305,6 +313,7 @@ def solve_problem(
 ) -> OptimalGait:
     """Solve a :class:`GaitProblem` (see :func:`optimize_gait`)."""
     t_start = time.perf_counter()
+    check_warm_start(problem, guess)
     model = problem.model
     p = model.p
     mesh = mesh or DEFAULT_MESH
