@@ -48,16 +48,17 @@ def check_positive(name: str, value: Any, example: str) -> float:
 def check_count(name: str, value: Any, low: int, high: int, why: str) -> int:
     """``value`` as an integer in ``[low, high]``, or a :class:`GaitoptInputError` that states
     the limit and ``why`` it is there."""
+    hint = f"e.g. {name}={low}"
     if isinstance(value, bool):
-        raise GaitoptInputError(f"`{name}` must be an integer, got {value!r}")
+        raise GaitoptInputError(f"`{name}` must be an integer, got {value!r}; {hint}")
     if not isinstance(value, numbers.Integral):
         if isinstance(value, numbers.Real) and math.isfinite(value) and float(value).is_integer():
             value = int(value)
         else:
-            raise GaitoptInputError(f"`{name}` must be an integer, got {value!r}")
+            raise GaitoptInputError(f"`{name}` must be an integer, got {value!r:.80}; {hint}")
     value = int(value)
     if value < low:
-        raise GaitoptInputError(f"`{name}` must be at least {low}, got {value}")
+        raise GaitoptInputError(f"`{name}` must be at least {low}, got {value}; {hint}")
     if value > high:
         raise GaitoptInputError(f"`{name}` = {value} is above the limit {high}: {why}")
     return value

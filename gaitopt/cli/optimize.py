@@ -19,6 +19,12 @@ LOW ≤ u ≤ HIGH (within what the model declares: Kuo's push-off only pushes).
 ``optimal.json``, ``inputs.csv``, ``orbit.png``, ``inputs.png`` and ``gait.gif``.  Exit status
 0 optimal gait found and verified, 1 none (the JSON is still printed), 2 bad input.
 
+Limits, checked before any work (one line and exit 2 beyond them; the Python API checks the
+same, :func:`gaitopt.optimize_gait`): ``--steps`` 1 to 4 (the transcription grows faster than
+the steps: the five-link biped takes 9 GB at 4), ``--starts`` 1 to 256 (each a full solve),
+``--seed`` 0 to 2⁶³ − 1, ``--orbits`` 1 to 1000, ``--cold`` 0 to 200 (a library's most
+points).
+
 With ``--starts`` > 1 the JSON's ``starts`` lists every start's outcome (``converged`` to the
 minimum at index ``minimum``, ``not_converged`` or ``no_start``, with its ``message``): a start
 that cannot begin or fails is recorded and the search goes on.
@@ -63,7 +69,19 @@ _FIXABLE = ("period", "step_length", "speed")
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare the arguments of ``gaitopt optimize``."""
+    from ..optimize.problem import MAX_STEPS
+    from ..optimize.solve import MAX_SEED, MAX_STARTS
     from .common import _count, _model_arguments, _scheduler_address
+
+    why_steps = (
+        "the transcription grows faster than the number of steps (the five-link biped: 9 GB at "
+        f"4); use --steps {MAX_STEPS} or fewer"
+    )
+    why_starts = (
+        "each start is a full solve (1-3 s on the five-link biped) and each minimum it finds is "
+        f"refined and simulated; use --starts {MAX_STARTS} or fewer, or several runs with other "
+        f"--seed values"
+    )
 
     _model_arguments(parser)
     parser.add_argument(
@@ -88,11 +106,27 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--free", action="append", metavar="PARAM", help="optimise this parameter too"
     )
-    parser.add_argument("--steps", type=_count(1), default=1, help="steps per orbit (default 1)")
     parser.add_argument(
-        "--starts", type=_count(1), default=1, help="seeded multi-start (default 1)"
+        "--steps",
+        type=_count(1, MAX_STEPS, why_steps),
+        default=1,
+        metavar="K",
+        help=f"steps per orbit (default 1, at most {MAX_STEPS})",
     )
-    parser.add_argument("--seed", type=int, default=0, help="seed of the multi-start (default 0)")
+    parser.add_argument(
+        "--starts",
+        type=_count(1, MAX_STARTS, why_starts),
+        default=1,
+        metavar="N",
+        help=f"seeded multi-start (default 1, at most {MAX_STARTS})",
+    )
+    parser.add_argument(
+        "--seed",
+        type=_count(0, MAX_SEED, "seeds are non-negative 64-bit integers; e.g. --seed 0"),
+        default=0,
+        metavar="S",
+        help="seed of the multi-start (default 0)",
+    )
     parser.add_argument(
         "--scheduler",
         type=_scheduler_address,
@@ -126,7 +160,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--cold",
-        type=_count(0),
+        type=_count(0, 200, "a library has at most 200 points (--library ...:COUNT)"),
         default=2,
         help="--library: points checked against cold starts (default 2)",
     )

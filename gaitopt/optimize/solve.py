@@ -19,6 +19,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..arguments import check_count, check_positive
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
 from .active import _active, _violation
@@ -26,12 +27,34 @@ from .arcs import _describe, detect_structure, structure_of
 from .certify import _certify
 from .collocation import Arc, Collocation, RadauMesh
 from .guess import NoStart, _start_guess, check_warm_start
-from .problem import GaitProblem, as_problem
+from .problem import _WHY_STEPS, MAX_STEPS, GaitProblem, as_problem
 from .result import Minimum, OptimalGait, StartRecord
 
-__all__ = ["optimize_gait", "solve_problem", "DEFAULT_MESH"]
+__all__ = [
+    "optimize_gait",
+    "solve_problem",
+    "DEFAULT_MESH",
+    "MAX_STEPS",
+    "MAX_STARTS",
+    "MAX_SEED",
+    "MAX_MESH_INTERVALS",
+    "MAX_MESH_DEGREE",
+]
 
 DEFAULT_MESH = RadauMesh(6, 6)
+
+# -- limits of the counts, checked before any work (`gaitopt optimize` states the same) -------
+#: Most starts of one multi-start (``starts``, ``--starts``): each is a solve of 1–3 s on the
+#: five-link biped, and each distinct minimum it finds is refined and simulated.
+MAX_STARTS = 256
+#: Largest seed (``seed``, ``--seed``): seeds are non-negative 64-bit integers.
+MAX_SEED = 2**63 - 1
+#: Most intervals per phase of an initial ``mesh`` (refined up to three times by doubling:
+#: at most 192); the default is 6.
+MAX_MESH_INTERVALS = 24
+#: Highest Radau degree of a ``mesh`` (the default is 6; beyond about 10 the collocation's
+#: Lagrange bases lose accuracy in double precision).
+MAX_MESH_DEGREE = 10
 _IPOPT = {
     "ipopt.print_level": 0,
     "ipopt.sb": "yes",
@@ -95,21 +118,26 @@ def optimize_gait(
     free : tuple of str
         Parameters to optimise too, within their declared ranges.
     steps : int
-        Returns to the section per orbit.
+        Returns to the section per orbit, 1 to :data:`MAX_STEPS` (4: the transcription grows
+        faster than the number of steps; the five-link biped takes 9 GB at 4).
     starts : int or sequence of int
-        Number of seeded starts (start 0 from the model's default start, start ``j`` perturbed
-        with ``numpy.random.default_rng([seed, j])``), or the indices of the starts to run (to
-        re-run a given start alone); every distinct local minimum is reported in ``minima``
-        with the starts that reached it, and every start's outcome in ``starts``: a start that
-        cannot begin (its perturbed section point is not a state of the model) or does not
-        converge is recorded with its reason, and the search goes on.
+        Number of seeded starts, 1 to :data:`MAX_STARTS` (256) (start 0 from the model's
+        default start, start ``j`` perturbed with ``numpy.random.default_rng([seed, j])``), or
+        the distinct indices (0 to :data:`MAX_SEED`) of at most 256 starts to run (to re-run a
+        given start alone); every distinct local minimum is reported in ``minima`` with the
+        starts that reached it, and every start's outcome in ``starts``: a start that cannot
+        begin (its perturbed section point is not a state of the model) or does not converge
+        is recorded with its reason, and the search goes on.
     seed : int
-        Seed of the multi-start.
+        Seed of the multi-start, 0 to :data:`MAX_SEED` (2⁶³ − 1).
     mesh : RadauMesh, optional
-        Initial mesh (default: 6 intervals of degree 6 per phase), refined by doubling the
-        intervals until the discretisation error is below ``tol``.
+        Initial mesh (default: 6 intervals of degree 6 per phase; at most
+        :data:`MAX_MESH_INTERVALS` (24) intervals and degree :data:`MAX_MESH_DEGREE` (10)),
+        refined by doubling the intervals (at most three times) until the discretisation error
+        is below ``tol``.
     tol : float
-        Target of the relative discretisation error of the cost and the orbit.
+        Target of the relative discretisation error of the cost and the orbit: a positive
+        finite number (a target below IPOPT's 1e-11 is never met, and the result says so).
     verify : bool
         Re-simulate the optimum and compute the multipliers (always, unless False for speed).
     guess : OptimalGait, optional
@@ -127,10 +155,12 @@ def optimize_gait(
     Raises
     ------
     GaitoptInputError
-        Bad input, before any work: a statement with no optimum (positive work without input
-        bounds), a ``guess`` that cannot warm start
+        Bad input, before any work: a count above its limit (``steps``, ``starts``, ``seed``,
+        ``mesh``), a ``tol`` that is not a positive number, a statement with no optimum
+        (positive work without input bounds), a ``guess`` that cannot warm start
         (:class:`~gaitopt.optimize.guess.WarmStartError`).
     """
+    _check_counts(steps=steps, starts=starts, seed=seed, mesh=mesh, tol=tol, verify=verify)
     problem = as_problem(
         model,
         cost=cost,
@@ -155,20 +185,60 @@ def optimize_gait(
     )
 
 
+_WHY_STARTS = (
+    "each start is a full solve (1-3 s on the five-link biped) and each minimum it finds is "
+    f"refined and simulated; use starts <= {MAX_STARTS} (gaitopt.optimize.solve.MAX_STARTS), or "
+    "several searches with other seeds"
+)
+_WHY_SEED = "seeds are non-negative 64-bit integers; e.g. seed=0"
+
+
+def _check_counts(*, steps: Any, starts: Any, seed: Any, mesh: Any, tol: Any, verify: Any) -> None:
+    """Every count and tolerance of :func:`optimize_gait` against its limit, before any work
+    (:func:`gaitopt.arguments.check_count`, as :func:`gaitopt.find_limit_cycle` does)."""
+    check_count("steps", steps, 1, MAX_STEPS, _WHY_STEPS)
+    _start_indices(starts)
+    check_count("seed", seed, 0, MAX_SEED, _WHY_SEED)
+    if mesh is not None:
+        if not isinstance(mesh, RadauMesh):
+            raise GaitoptInputError(
+                f"`mesh` must be a RadauMesh or None, got {mesh!r}; e.g. mesh=RadauMesh(6, 6)"
+            )
+        check_count("mesh.intervals", mesh.intervals, 1, MAX_MESH_INTERVALS,
+                    f"the mesh is refined by doubling up to three times; start at most at "
+                    f"{MAX_MESH_INTERVALS} intervals, e.g. mesh=RadauMesh(12, 6)")  # fmt: skip
+        check_count("mesh.degree", mesh.degree, 1, MAX_MESH_DEGREE,
+                    "high-degree Lagrange bases lose accuracy; use more intervals instead, "
+                    "e.g. mesh=RadauMesh(12, 6)")  # fmt: skip
+    check_positive("tol", tol, "1e-8")
+    if not isinstance(verify, (bool, np.bool_)):
+        raise GaitoptInputError(f"`verify` must be True or False, got {verify!r}")
+
+
 def _start_indices(starts: int | Sequence[int]) -> list[int]:
-    """``starts`` as a list of start indices (an int ``N`` means ``0 … N − 1``)."""
+    """``starts`` as a list of start indices (an int ``N`` means ``0 … N − 1``), at most
+    :data:`MAX_STARTS` of them."""
+    why = _WHY_STARTS
     if isinstance(starts, (int, np.integer)) and not isinstance(starts, bool):
-        if starts < 1:
-            raise GaitoptInputError(f"`starts` must be a positive integer, got {starts!r}; e.g. 4")
-        return list(range(int(starts)))
+        return list(range(check_count("starts", starts, 1, MAX_STARTS, why)))
     try:
         indices = [int(i) for i in starts]  # type: ignore[union-attr]
-    except (TypeError, ValueError):
-        indices = []
-    if not indices or any(i < 0 for i in indices) or len(set(indices)) != len(indices):
+        exact = all(int(i) == i for i in starts)  # type: ignore[union-attr]
+    except (TypeError, ValueError, OverflowError):
+        indices, exact = [], False
+    if (
+        not exact
+        or not indices
+        or any(i < 0 or i > MAX_SEED for i in indices)
+        or len(set(indices)) != len(indices)
+    ):
         raise GaitoptInputError(
-            f"`starts` must be a positive integer or distinct start indices >= 0, got "
-            f"{starts!r}; e.g. starts=4 or starts=[0, 3]"
+            f"`starts` must be a positive integer or distinct start indices from 0 to "
+            f"{MAX_SEED}, got {starts!r:.200}; e.g. starts=4 or starts=[0, 3]"
+        )
+    if len(indices) > MAX_STARTS:
+        raise GaitoptInputError(
+            f"`starts` lists {len(indices)} start indices, above the limit {MAX_STARTS}: {why}"
         )
     return indices
 
@@ -311,13 +381,22 @@ def solve_problem(
     guess: OptimalGait | None = None,
     scheduler: str | None = None,
 ) -> OptimalGait:
-    """Solve a :class:`GaitProblem` (see :func:`optimize_gait`)."""
+    """Solve a :class:`GaitProblem` (see :func:`optimize_gait`: the same arguments, the same
+    limits, checked before any work)."""
     t_start = time.perf_counter()
+    if not isinstance(problem, GaitProblem):
+        raise GaitoptInputError(
+            f"`problem` must be a GaitProblem, got {type(problem).__name__}; e.g. "
+            f"GaitProblem(gaitopt.model('compass_gait', slope=0), period=0.8, step_length=0.3)"
+        )
+    _check_counts(steps=problem.steps, starts=starts, seed=seed, mesh=mesh, tol=tol,
+                  verify=verify)  # fmt: skip
     check_warm_start(problem, guess)
     model = problem.model
     p = model.p
     mesh = mesh or DEFAULT_MESH
     indices = _start_indices(starts)
+    seed = int(seed)
     col = _collocation(problem, mesh)
     if scheduler is not None:  # the same attempts, on Dask workers
         from .library import dask_starts
