@@ -1,13 +1,16 @@
 """Bad input to ``optimize_gait`` and ``gaitopt optimize`` is one clear error before any work
-(issues 24 and 25): a failed result as a warm start, counts beyond their stated limits, ``tol``.
+(issues 24 and 25): a failed result as a warm start, counts beyond their stated limits, ``tol``,
+and level ground with nothing fixed (whose least effort is standing still); and the advice the
+messages give names options that exist where they are shown.
 
 Every check here is input validation, so each case must fail fast: the time limits (2 s per
-call) are an order below the cheapest solve they guard against (``--steps 1000`` grew past 5 GB;
-``--starts 100000`` ran for hours).
+call) are an order below the cheapest solve they guard against (the level-ground compass gait
+took about a minute to reach its 4 mm step; ``--steps 1000`` grew past 5 GB).
 """
 
 from __future__ import annotations
 
+import json
 import re
 import time
 
@@ -135,6 +138,11 @@ def test_problem_steps_limit():
         (["--steps", "1000"], r"argument --steps: '1000' is above the limit 4: .*--steps 4 or "),
         (["--starts", "100000"], r"argument --starts: '100000' is above the limit 256: "
                                  r".*--starts 256 or fewer"),
+        (["--tol", "0"], r"argument --tol: expected a positive relative error, got '0'; "
+                         r"e\.g\. --tol 1e-6"),
+        (["--tol", "nan"], r"argument --tol: .* got 'nan'"),
+        (["--tol=-1e-8"], r"argument --tol: .* got '-1e-8'"),
+        (["--tol", "abc"], r"argument --tol: .* got 'abc'"),
         (["--cold", "1000"], r"argument --cold: '1000' is above the limit 200"),
         (["--orbits", "5000"], r"argument --orbits: '5000' is above the limit 1000"),
     ],
@@ -142,3 +150,119 @@ def test_problem_steps_limit():
 def test_cli_limits(extra, pattern, capsys):
     err = _cli_error([*CLI_LEVEL, *extra], capsys)
     assert re.search(pattern, err), err
+
+
+def test_cli_tol_reaches_the_solve(capsys):
+    # --tol is passed on.  The README's level 0.3 m optimum settles to 1e-10 in one refinement
+    # (measured 9.6e-11, 6 → 12 intervals), so --tol 1e-6 certifies it; 1e-14 cannot be met
+    # (IPOPT solves to 1e-11): refined three times, not certified (exit 1), and the advice names
+    # the CLI's --tol, not Python's `tol`.
+    status = main([*CLI_LEVEL, "--tol", "1e-6", "--json"])
+    report = json.loads(capsys.readouterr().out)
+    assert status == 0 and report["success"], report["message"]
+    assert report["cost"] == pytest.approx(6.668848535, rel=1e-8)  # README, 10 digits
+    assert report["discretisation_error"] <= 1e-6
+    status = main([*CLI_LEVEL, "--tol", "1e-14", "--json"])
+    report = json.loads(capsys.readouterr().out)
+    assert status == 1 and not report["success"]
+    assert "above the target 1e-14 after 3 refinements" in report["message"]
+    assert "Loosen --tol" in report["message"] and "`" not in report["message"]
+
+
+# -- task 4: level ground with nothing fixed ------------------------------------------------------
+@pytest.mark.parametrize("name", ["compass_gait", "simplest_walker", "kneed_walker",
+                                  "five_link_biped"])  # fmt: skip
+def test_level_ground_with_nothing_fixed_is_refused_at_once(name):
+    model = gaitopt.model(name, slope=0.0)
+    error = _fast(lambda: optimize_gait(model))
+    text = str(error)
+    assert text.startswith(f"{name} on level ground (slope=0) with no `period`")
+    assert "standing still" in text and "step_length=0.3 and period=0.8" in text
+
+
+def test_level_ground_refusal_is_only_where_it_holds():
+    # Anything that poses the problem is accepted: a fixed period, step length or speed, a free
+    # slope, a slope, the cost of transport (per distance: not shown to vanish).
+    compass = gaitopt.model("compass_gait", slope=0.0)
+    for fixed in ({"period": 0.8}, {"step_length": 0.3}, {"speed": 0.375}):
+        assert GaitProblem(compass, **fixed).cost == "effort"
+    assert GaitProblem(compass, free=("slope",)).free == ("slope",)
+    assert GaitProblem(gaitopt.model("compass_gait", slope=0.01)).period is None
+    bounded = {"hip_torque": 20}
+    assert GaitProblem(compass, cost="cot", bounds=bounded).cost == "cot"
+    with pytest.raises(GaitoptInputError, match="least positive work is 0"):
+        GaitProblem(compass, cost="work", bounds=bounded)
+
+
+def test_level_ground_from_the_cli(capsys):
+    # The issue's command: it took about a minute and said "Loosen `tol`" (no such option);
+    # now one line, exit 2, advice in the CLI's options.
+    err = _cli_error(["optimize", "compass_gait", "--set", "slope=0"], capsys)
+    assert "standing still" in err
+    assert "--fix step_length=0.3 and --fix period=0.8" in err
+    assert "--set slope=0.0525" in err  # the model's default slope, where it walks passively
+    assert "`" not in err
+
+
+# -- advice names options that exist where it is shown ---------------------------------------------
+def test_python_advice_in_cli_options(capsys):
+    from gaitopt.cli.optimize import for_the_cli
+
+    assert for_the_cli("Loosen `tol` to accept it") == "Loosen --tol to accept it"
+    assert for_the_cli("e.g. bounds={'hip_torque': 20}") == "e.g. --bound hip_torque=20"
+    assert for_the_cli("bounds={'hip_torque': (0, 20)}") == "--bound hip_torque=0:20"
+    assert for_the_cli("use cost='effort'") == "use --cost effort"
+    assert for_the_cli("e.g. step_length=0.3 and period=0.8") == (
+        "e.g. --fix step_length=0.3 and --fix period=0.8"
+    )
+    # Through the CLI: positive work without a bound names --bound, not Python's `bounds`.
+    err = _cli_error(["optimize", "compass_gait", "--cost", "work", "--fix", "period=0.8"],
+                     capsys)  # fmt: skip
+    assert "--bound hip_torque=20" in err and "bounds=" not in err and "`" not in err
+
+
+def test_every_optimize_advice_names_an_existing_cli_option():
+    # Every `name` or name= the optimisation's messages mention, once translated for the CLI,
+    # is an option of `gaitopt optimize` (source: the messages themselves, read from the code).
+    import argparse
+    import ast
+    from pathlib import Path
+
+    from gaitopt.cli.optimize import add_arguments, for_the_cli
+
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    options = {s for a in parser._actions for s in a.option_strings}
+    root = Path(gaitopt.__file__).parent
+    files = [root / "optimize" / n for n in ("solve.py", "guess.py", "problem.py", "result.py")]
+    python_only = {"model", "problem", "guess", "mesh", "verify", "state_bounds", "clearance",
+                   "guard_margin", "continuous_inputs", "mesh.intervals", "mesh.degree",
+                   "vary", "locate", "gait.orbit", "g"}  # fmt: skip
+    # Model parameters named in a message (a model lacking `gravity`) are not options.
+    python_only |= {n for cls in gaitopt.REGISTRY.values() for n in cls().params}
+    checked = 0
+    for path in files:
+        tree = ast.parse(path.read_text())
+        docstrings = {
+            id(node.body[0].value)
+            for node in ast.walk(tree)
+            if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef))
+            and node.body
+            and isinstance(node.body[0], ast.Expr)
+            and isinstance(node.body[0].value, ast.Constant)
+        }
+        texts = [
+            node.value
+            for node in ast.walk(tree)
+            if isinstance(node, ast.Constant)
+            and isinstance(node.value, str)
+            and id(node) not in docstrings
+        ]  # string literals and the literal parts of f-strings: the messages
+        for text in texts:
+            for name in re.findall(r"`([\w.]+)`", text):
+                if name in python_only:
+                    continue  # never reaches the CLI: its own checks or no such input there
+                cli = for_the_cli(f"`{name}`")
+                assert cli.split()[0] in options, (path.name, name, cli)
+                checked += 1
+    assert checked >= 10

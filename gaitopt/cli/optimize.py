@@ -4,7 +4,7 @@
 
     gaitopt optimize MODEL [--set NAME=VALUE ...] [--cost effort|work|cot] [--fix period=S]
                            [--fix step_length=M] [--fix speed=V] [--bound INPUT=MAX ...]
-                           [--free PARAM ...] [--steps K] [--starts N] [--seed S]
+                           [--free PARAM ...] [--steps K] [--starts N] [--seed S] [--tol TOL]
                            [--scheduler ADDRESS] [--stabilise [--q Q] [--r R] [--orbits N]]
                            [--library NAME=FIRST:LAST:COUNT [--cold K]] [--json] [--out DIR]
 
@@ -23,11 +23,13 @@ Limits, checked before any work (one line and exit 2 beyond them; the Python API
 same, :func:`gaitopt.optimize_gait`): ``--steps`` 1 to 4 (the transcription grows faster than
 the steps: the five-link biped takes 9 GB at 4), ``--starts`` 1 to 256 (each a full solve),
 ``--seed`` 0 to 2⁶³ − 1, ``--orbits`` 1 to 1000, ``--cold`` 0 to 200 (a library's most
-points).
+points); ``--tol`` a positive number (the relative discretisation error the mesh refinement must
+reach, default 1e-8; below IPOPT's 1e-11 it is never met and the result says so).
 
 With ``--starts`` > 1 the JSON's ``starts`` lists every start's outcome (``converged`` to the
 minimum at index ``minimum``, ``not_converged`` or ``no_start``, with its ``message``): a start
-that cannot begin or fails is recorded and the search goes on.
+that cannot begin or fails is recorded and the search goes on.  On level ground (``--set
+slope=0``) with no ``--fix``, the least effort is standing still, no gait: exit 2 at once.
 
 ``--scheduler local`` (or a Dask address) runs the ``--starts`` on Dask
 (:func:`gaitopt.optimize.library.dask_starts`; the same minima as the serial run).
@@ -65,6 +67,46 @@ __all__ = ["add_arguments", "run", "HELP"]
 
 HELP = "synthesise an optimal gait (least effort, work or cost of transport) with input profiles"
 _FIXABLE = ("period", "step_length", "speed")
+
+
+#: The Python API's names in advice, as the options of ``gaitopt optimize`` (a message shown
+#: on the command line names the options that exist there): ``(pattern, replacement)``.
+_CLI_ADVICE = (
+    (r"bounds=\{'(\w+)': \((-?[\d.e+-]+), (-?[\d.e+-]+)\)\}", r"--bound \1=\2:\3"),
+    (r"bounds=\{'(\w+)': (-?[\d.e+-]+)\}", r"--bound \1=\2"),
+    (r"cost='(\w+)'", r"--cost \1"),
+    (r"gaitopt\.model\('\w+', (\w+)=([\d.e+-]+)\)", r"--set \1=\2"),
+    (r"\b(period|step_length|speed)=([\d.e+-]+)", r"--fix \1=\2"),
+    (r"\b(starts|seed|steps|tol)=([\d.e+-]+)", r"--\1 \2"),
+    (r"`(period|step_length|speed)`", r"--fix \1"),
+    (r"`bounds(\[[^]]*\])?`", "--bound"),
+    (r"`(cost|starts|seed|steps|tol|free|scheduler)`", r"--\1"),
+)
+
+
+def for_the_cli(message: str) -> str:
+    """``message`` (from :func:`gaitopt.optimize_gait`, in the Python API's names) with its
+    advice in the options of ``gaitopt optimize``: ```tol``` → ``--tol``, ``bounds={'hip': 20}``
+    → ``--bound hip=20``, ``period=0.8`` → ``--fix period=0.8``, ``cost='effort'`` →
+    ``--cost effort``."""
+    import re
+
+    for pattern, replacement in _CLI_ADVICE:
+        message = re.sub(pattern, replacement, message)
+    return message
+
+
+def _tolerance(text: str) -> float:
+    """An argparse ``type`` for ``--tol``: a positive finite number."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(
+            f"expected a positive relative error, got {text!r}; e.g. --tol 1e-6"
+        )
+    return value
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -126,6 +168,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=0,
         metavar="S",
         help="seed of the multi-start (default 0)",
+    )
+    parser.add_argument(
+        "--tol",
+        type=_tolerance,
+        default=1e-8,
+        metavar="TOL",
+        help="target of the relative discretisation error of cost and orbit under mesh "
+        "refinement, a positive number (default 1e-8)",
     )
     parser.add_argument(
         "--scheduler",
@@ -199,6 +249,7 @@ def _parse(args: argparse.Namespace, model: Any) -> dict[str, Any]:
         "bounds": bounds,
         "state_bounds": dict(model.state_bounds),
         "free": free,
+        "tol": args.tol,
     }
 
 
@@ -256,12 +307,15 @@ def run(args: argparse.Namespace) -> int:
                 **options,
             )
     except GaitoptInputError as exc:
-        raise InputError(str(exc)) from None
+        raise InputError(for_the_cli(str(exc))) from None
     except OSError as exc:  # a Dask scheduler that cannot be reached
         if args.scheduler in (None, "local"):
             raise
         raise InputError(f"--scheduler {args.scheduler}: cannot reach it ({exc})") from None
     report = gait.to_json(minima=args.starts > 1)
+    report["message"] = for_the_cli(report["message"])
+    for entry in (*report.get("minima", ()), *report.get("starts", ())):
+        entry["message"] = for_the_cli(entry["message"])
     stabilised = True
     if args.stabilise:
         from ..optimize import stabilise

@@ -57,6 +57,7 @@ def run_library(args: argparse.Namespace, model: Any, options: dict[str, Any]) -
     the exit status."""
     from ..optimize.library import gait_library
     from .common import EXIT_BAD_INPUT, EXIT_NOT_FOUND, EXIT_OK, InputError
+    from .optimize import for_the_cli
     from .output import _print_json, _solver_output_to_stderr, write_outputs
 
     vary, values = _parse_library(args, model, options)
@@ -73,7 +74,7 @@ def run_library(args: argparse.Namespace, model: Any, options: dict[str, Any]) -
                 **options,
             )
     except GaitoptInputError as exc:
-        raise InputError(str(exc)) from None
+        raise InputError(for_the_cli(str(exc))) from None
     except OSError as exc:
         if args.scheduler in (None, "local"):
             raise
@@ -84,6 +85,10 @@ def run_library(args: argparse.Namespace, model: Any, options: dict[str, Any]) -
         "cost_kind": args.cost,
         **library.to_json(),
     }
+    report["message"] = for_the_cli(report["message"])
+    for entry in (*report["points"], *report["events"], *report["cold_checks"]):
+        if "message" in entry:
+            entry["message"] = for_the_cli(entry["message"])
     lost = write_outputs(args.out, lambda folder: _write_library(library, report, folder))
     if args.json:
         _print_json(report)

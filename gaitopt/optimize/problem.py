@@ -281,6 +281,46 @@ class GaitProblem:
                     f"{model.name} declares no foothold, so step length, speed and cost of "
                     f"transport are undefined; leave them free and use cost='effort'"
                 )
+        self._check_not_standing()
+
+    def _check_not_standing(self) -> None:
+        """A walker on level ground with nothing fixed has no optimal gait: gravity does no work
+        over a step, so every step costs effort (or positive work) to replace what the heel
+        strike loses, and the shorter and slower the step the less; the infimum, 0, is standing
+        still, which is no gait.  The optimiser would shrink the step towards it (at slope
+        1e-12 the compass gait's ended at 4 mm after about a minute, its refinement never
+        settling; the five-link biped's at a 4 cm shuffle of effort 2.4e-5 N²·m²·s, against
+        263.7 for OptimTraj's 0.4 m step), so the statement is refused before any work.  Not
+        for the cost of transport (per distance) or a user's cost, nor when the slope is free
+        (a passive gait downhill costs nothing)."""
+        model = self.model
+        if self.cost not in ("effort", "work") or self.footholds() is None:
+            return
+        if self.period is not None or self.step_length is not None or self.speed is not None:
+            return
+        if "slope" not in model.params or "slope" in self.free or model.params["slope"] != 0:
+            return
+        what = "effort" if self.cost == "effort" else "positive work"
+        low, high = self.input_bounds()
+        impulses = [model.inputs[j] for j in self.impulsive_index if low[j] < 0 or high[j] > 0]
+        also = (
+            f" (and every gait {' and '.join(impulses)} alone powers: the effort leaves "
+            f"impulses out)"
+            if impulses and self.cost == "effort"
+            else ""
+        )
+        default = next(sp.default for sp in model.parameter_specs() if sp.name == "slope")
+        downhill = (
+            f", or walk down a slope, e.g. gaitopt.model({model.name!r}, slope={default:g})"
+            if model.passive_gait and default > 0
+            else ""
+        )
+        raise GaitoptInputError(
+            f"{model.name} on level ground (slope=0) with no `period`, `step_length` or `speed` "
+            f"given has no optimal gait: the least {what} is 0, reached by standing still"
+            f"{also}, and the optimiser would only shrink the step towards it; fix a step "
+            f"length, period or speed, e.g. step_length=0.3 and period=0.8{downhill}"
+        )
 
     # -- names and sizes ---------------------------------------------------------------------
     @property

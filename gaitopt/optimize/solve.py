@@ -156,8 +156,9 @@ def optimize_gait(
     ------
     GaitoptInputError
         Bad input, before any work: a count above its limit (``steps``, ``starts``, ``seed``,
-        ``mesh``), a ``tol`` that is not a positive number, a statement with no optimum
-        (positive work without input bounds), a ``guess`` that cannot warm start
+        ``mesh``), a ``tol`` that is not a positive number, a statement with no optimum (level
+        ground with nothing fixed: the least effort is standing still; positive work without
+        input bounds), a ``guess`` that cannot warm start
         (:class:`~gaitopt.optimize.guess.WarmStartError`).
     """
     _check_counts(steps=steps, starts=starts, seed=seed, mesh=mesh, tol=tol, verify=verify)
