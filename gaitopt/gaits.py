@@ -22,10 +22,16 @@ When the search fails only ``cycle.json`` is written (and figures of an earlier 
 An actuated-only model (``passive_gait`` False: the five-link biped) has no passive gait to
 search for; it is skipped, with the reason, and does not count as a failure.
 
-Every file is written whole or not at all (:mod:`gaitopt.files`: a temporary file in the same
-directory, then :func:`os.replace`).  A summary table ends the run.  Exit status: 0 when every
-model was solved and drawn, 1 when a model failed to solve or a figure failed (the error is
-printed; the other models go on), 2 for bad arguments.
+Each model's folder is written whole or not at all (:func:`gaitopt.files.folder_written_whole`):
+its files go into a hidden ``OUT/.<model>.<random>.partial`` folder, which then replaces
+``OUT/<model>/`` in one step.  Files that other tools keep there (the Strandbeest study's
+``numbers.json`` and figures) are carried over; of the files named above, only those this run
+wrote are kept.  So a run stopped with Ctrl-C leaves every model's folder either as the last
+complete run left it or complete from this one (never a ``cycle.json`` without its figures),
+prints ``gaitopt.gaits: interrupted`` and exits with status 130.  A summary table ends a
+complete run.  Exit status: 0 when every model was solved and drawn, 1 when a model failed to
+solve or a figure failed (the error is printed; the other models go on), 2 for bad arguments,
+130 interrupted.
 """
 
 from __future__ import annotations
@@ -41,8 +47,9 @@ from pathlib import Path
 import numpy as np
 
 from .errors import GaitoptInputError
-from .files import write_json
+from .files import folder_written_whole, write_json
 from .hybrid import HybridModel
+from .interrupts import caused_by_interrupt, interrupts_outside_casadi
 from .models import REGISTRY
 from .models import model as make_model
 from .result import LimitCycle
@@ -54,6 +61,8 @@ __all__ = ["main", "run_model", "return_map_interval"]
 WALK_STEPS = 4  # simulated steps in walking.gif
 TRANSIENT_STEPS = 8  # simulated steps overlaid on the phase portrait
 FIGURES = ("phase_portrait.png", "return_map.png", "walking.gif", "animation.gif")
+#: The entries of ``OUT/<model>/`` this runner owns: a run replaces them (the others stay).
+OWNED = ("cycle.json", *FIGURES)
 
 
 def return_map_interval(cycle: LimitCycle) -> tuple[float, float]:
@@ -75,6 +84,11 @@ def _drawable(model: HybridModel) -> bool:
 def run_model(name: str, out: Path) -> tuple[LimitCycle, list[str], list[str]]:
     """Solve one model at its defaults and write its files under ``out/name``.
 
+    The folder is written whole (:func:`gaitopt.files.folder_written_whole`): the files of
+    :data:`OWNED` that this run writes replace the folder's, those it does not write (the
+    figures of a failed search) are removed, the other files in the folder stay.  If anything
+    raises before the end (Ctrl-C), ``out/name`` is left as it was.
+
     Returns
     -------
     cycle : LimitCycle
@@ -83,25 +97,33 @@ def run_model(name: str, out: Path) -> tuple[LimitCycle, list[str], list[str]]:
     errors : list of str
         Figures that failed, each with its error.
     """
+    model = make_model(name)
+    cycle = find_limit_cycle(model)
+    with folder_written_whole(out / name, replaces=OWNED) as folder:
+        written, errors = _write_model(model, cycle, folder)
+    return cycle, written, errors
+
+
+def _write_model(
+    model: HybridModel, cycle: LimitCycle, folder: Path
+) -> tuple[list[str], list[str]]:
+    """``cycle.json`` and, for a gait found, its figures in ``folder``; returns the files
+    written and the figures that failed."""
     from . import animation, plotting  # matplotlib only when drawing
 
-    model = make_model(name)
-    folder = out / name
-    folder.mkdir(parents=True, exist_ok=True)
-    cycle = find_limit_cycle(model)
     # No solve_time: a tracked result must not change from run to run (timings: `make bench`).
     write_json(cycle.as_dict(timing=False), folder / "cycle.json")
     written, errors = ["cycle.json"], []
-    if not cycle.success:
-        for stale in FIGURES:  # pictures of an earlier run would contradict cycle.json
-            (folder / stale).unlink(missing_ok=True)
-        return cycle, written, errors
+    if not cycle.success:  # no figures: those of an earlier run would contradict cycle.json
+        return written, errors
 
     def attempt(filename: str, draw) -> None:
         try:
             draw(folder / filename)
             written.append(filename)
         except Exception as exc:  # a figure must not stop the run; it is reported
+            if caused_by_interrupt(exc):
+                raise
             errors.append(f"{filename}: {type(exc).__name__}: {exc}")
             traceback.print_exc(file=sys.stderr)
 
@@ -130,7 +152,7 @@ def run_model(name: str, out: Path) -> tuple[LimitCycle, list[str], list[str]]:
         attempt("return_map.png", staircase)
     if _drawable(model):
         attempt(animation.gif_name(model), walking)
-    return cycle, written, errors
+    return written, errors
 
 
 def _fmt(value: float, spec: str) -> str:
@@ -180,6 +202,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         help=f"comma-separated model names (default: all of {', '.join(REGISTRY)})",
     )
     args = parser.parse_args(argv)
+    try:
+        with interrupts_outside_casadi():  # else CasADi may turn Ctrl-C into another error
+            return _run(args)
+    except BaseException as exc:
+        if not caused_by_interrupt(exc):
+            raise
+    # Ctrl-C: every folder is as the last complete write left it.
+    sys.stdout.flush()
+    print("gaitopt.gaits: interrupted", file=sys.stderr, flush=True)
+    return 130
+
+
+def _run(args: argparse.Namespace) -> int:
+    """:func:`main` after its arguments are parsed (and without its handling of Ctrl-C)."""
     names = (
         list(REGISTRY)
         if args.models is None
@@ -208,6 +244,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         try:
             cycle, written, errors = run_model(name, out)
         except Exception as exc:
+            if caused_by_interrupt(exc):
+                raise
             traceback.print_exc(file=sys.stderr)
             print(f"[{k}/{len(names)}] {name}: ERROR {type(exc).__name__}: {exc}", flush=True)
             rows.append((name, None))

@@ -17,7 +17,8 @@
 Exit status (docs/design.md, public contract): 0 gait found / simulation completed; 1 no gait found
 (the JSON is still printed, with ``success: false``) or the simulation did not complete; 2 bad
 input, reported as one line on stderr that starts with ``gaitopt: error:``, names the argument,
-shows the value and suggests a fix.
+shows the value and suggests a fix; 130 interrupted (Ctrl-C: the one line ``gaitopt:
+interrupted`` on stderr, and an ``--out`` folder as it was before the run, never half-written).
 
 Each subcommand is an entry of :data:`SUBCOMMANDS`: a function that declares its arguments and a
 function that runs it.  Adding one (``continue``, ``control``) means writing those two functions
@@ -30,6 +31,7 @@ console script works however the package is installed.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 import warnings
@@ -39,6 +41,7 @@ from ..errors import GaitoptInputError
 from . import continue_, control, linkage, list_, optimize, simulate, solve
 from .common import (
     EXIT_BAD_INPUT,
+    EXIT_INTERRUPTED,
     EXIT_NOT_FOUND,
     EXIT_OK,
     PROG,
@@ -59,6 +62,7 @@ __all__ = [
     "EXIT_OK",
     "EXIT_NOT_FOUND",
     "EXIT_BAD_INPUT",
+    "EXIT_INTERRUPTED",
     "InputError",
     "build_model",
     "parse_guess",
@@ -137,8 +141,33 @@ def main(argv: Sequence[str] | None = None) -> int:
     Returns
     -------
     int
-        0 found / completed, 1 not found / not completed, 2 bad input.
+        0 found / completed, 1 not found / not completed, 2 bad input, 130 interrupted (Ctrl-C;
+        ``gaitopt: interrupted`` on stderr, no traceback).
     """
+    from ..interrupts import caused_by_interrupt, interrupts_outside_casadi
+
+    try:
+        with interrupts_outside_casadi():  # else CasADi may turn Ctrl-C into another error
+            return _run(argv)
+    except KeyboardInterrupt:  # Ctrl-C: wherever it landed, one line and the shell's 128 + 2
+        _interrupted()
+        return EXIT_INTERRUPTED
+    except Exception as exc:
+        if not caused_by_interrupt(exc):  # a bug: its traceback is wanted
+            raise
+        _interrupted()
+        return EXIT_INTERRUPTED
+
+
+def _interrupted() -> None:
+    """Say ``gaitopt: interrupted`` on stderr (after what stdout holds), once."""
+    with contextlib.suppress(Exception):
+        sys.stdout.flush()
+    print(f"{PROG}: interrupted", file=sys.stderr, flush=True)
+
+
+def _run(argv: Sequence[str] | None) -> int:
+    """:func:`main` without its handling of Ctrl-C."""
     parser = build_parser()
     try:
         args = parser.parse_args(argv)

@@ -25,6 +25,7 @@ PROG = "gaitopt"
 EXIT_OK = 0
 EXIT_NOT_FOUND = 1
 EXIT_BAD_INPUT = 2
+EXIT_INTERRUPTED = 130  # Ctrl-C (SIGINT): 128 + 2, as a shell reports a command it interrupted
 
 
 class InputError(Exception):

@@ -16,13 +16,29 @@ curve.png.  Exit status 0 curve followed, 1 no curve (JSON still printed), 2 bad
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from ..curves import CURVE_KINDS, Curve, bifurcation_curve
 from ..errors import GuessError, ParameterError, did_you_mean
 from ..parameters import check_parameter
-from .common import EXIT_NOT_FOUND, EXIT_OK, InputError, _echo, _number, build_model, parse_guess
-from .output import _print_json, _solver_output_to_stderr, print_header, write_result
+from .common import (
+    EXIT_BAD_INPUT,
+    EXIT_NOT_FOUND,
+    EXIT_OK,
+    InputError,
+    _echo,
+    _number,
+    build_model,
+    parse_guess,
+)
+from .output import (
+    _print_json,
+    _solver_output_to_stderr,
+    print_header,
+    write_outputs,
+    write_result,
+)
 
 __all__ = ["add_curve_arguments", "wants_curve", "run_curve"]
 
@@ -115,12 +131,14 @@ def run_curve(args: argparse.Namespace) -> int:
         raise InputError(
             f"--param {args.param} --param2 {args.param2} --to2 {args.to2}: {exc}"
         ) from None
-    if args.out:
-        write_curve(curve, Path(args.out))
+    lost = write_outputs(args.out, lambda folder: write_curve(curve, folder))
     if args.json:
         _print_json(curve.as_dict())
     else:
         print_curve(curve)
+    if lost is not None:  # --out failed after the run: said on stderr, the curve printed anyway
+        print(lost, file=sys.stderr)
+        return EXIT_BAD_INPUT
     return EXIT_OK if curve.success else EXIT_NOT_FOUND
 
 

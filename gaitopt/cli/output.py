@@ -77,27 +77,50 @@ def print_header(result: Any, *rows: tuple[str, Any]) -> None:
 
 
 def write_outputs(out: str | None, write: Callable[[Path], None]) -> str | None:
-    """Write a subcommand's files into ``--out`` after its computation, never losing them.
+    """Write a subcommand's files into ``--out`` after its computation, whole and never lost.
 
-    ``--out`` was checked before the computation (:func:`main`); if writing still fails (the
-    directory was removed or filled meanwhile) the files go to a fresh fallback directory
-    (:func:`gaitopt.files.write_or_fall_back`).
+    The files are written into a hidden staging folder and put in place at the end
+    (:func:`gaitopt.files.folder_written_whole`): a new ``--out`` folder appears complete or not
+    at all, and an existing one gets the new files at once (while they are moved in, a
+    ``gaitopt-INCOMPLETE.txt`` there says so).  Ctrl-C while the files are written leaves
+    ``--out`` as it was.  ``--out`` was checked before the computation (:func:`main`); if
+    writing still fails (the directory was removed or filled meanwhile) the files go to a fresh
+    fallback directory (:func:`gaitopt.files.write_or_fall_back`).
+
+    Parameters
+    ----------
+    out : str or None
+        The ``--out`` argument (None: nothing to write).
+    write : callable
+        ``write(folder)`` writes the files into ``folder``.
 
     Returns
     -------
     str or None
         None if the files are in ``--out`` (or there is no ``--out``); otherwise the one-line
-        error to print on stderr, saying where the files are: the caller prints it after its
-        results and exits with status 2.
+        error to print on stderr, saying where the files are (or that none were written): the
+        caller prints it after its results, which it prints as usual, and exits with status 2.
     """
     from ..files import write_or_fall_back
+    from ..interrupts import caused_by_interrupt
 
     if not out:
         return None
     try:
         folder, error = write_or_fall_back(out, write, prefix=f"{PROG}-out-")
     except OSError as exc:
-        return f"{PROG}: error: --out {out}: cannot write there, nor to a fallback folder ({exc})"
+        reason = " ".join(str(exc).split())
+        return (
+            f"{PROG}: error: --out {out}: cannot write there, nor to a fallback folder ({reason})"
+        )
+    except Exception as exc:  # a file that cannot be made (a figure): the result is still printed
+        if caused_by_interrupt(exc):
+            raise
+        reason = " ".join(f"{type(exc).__name__}: {exc}".split())
+        return (
+            f"{PROG}: error: --out {out}: writing the files failed ({reason}); nothing was "
+            f"written there"
+        )
     if error is None:
         return None
     reason = " ".join(str(error).split())
