@@ -232,6 +232,7 @@ def folder_written_whole(
         yield stage
         if replaces is not None and folder.is_dir():
             _carry_over(folder, stage, replaces)
+            shutil.copymode(folder, stage)  # the folder keeps its permissions
         with _signals_deferred():
             if not os.path.lexists(folder):
                 os.rename(stage, folder)
