@@ -71,7 +71,10 @@ class Follower(SpecialPoints):
         is no longer recognised as nominal downstream, e.g. by the switch at a PD)."""
         lam = self.lam(y)
         if self.nominal and lam != self.lam0:
-            return self.model0.replace(**{self.param: lam}).nominal_input()
+            try:
+                return self.model0.replace(**{self.param: lam}).nominal_input()
+            except ParameterError:  # a predictor or corrector iterate outside the range
+                pass  # (never accepted as a point: the follower stops at the range's end)
         return self.u0 + self.du * (lam - self.lam0)
 
     def jacobian(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
