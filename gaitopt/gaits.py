@@ -47,7 +47,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import GaitoptInputError
-from .files import folder_written_whole, write_json
+from .files import check_output_folder, folder_written_whole, write_json
 from .hybrid import HybridModel
 from .interrupts import caused_by_interrupt, interrupts_outside_casadi
 from .models import REGISTRY
@@ -95,12 +95,15 @@ def run_model(name: str, out: Path) -> tuple[LimitCycle, list[str], list[str]]:
     written : list of str
         Files written.
     errors : list of str
-        Figures that failed, each with its error.
+        Figures that failed, each with its error (or the folder, if it could not be written).
     """
     model = make_model(name)
     cycle = find_limit_cycle(model)
-    with folder_written_whole(out / name, replaces=OWNED) as folder:
-        written, errors = _write_model(model, cycle, folder)
+    try:
+        with folder_written_whole(out / name, replaces=OWNED) as folder:
+            written, errors = _write_model(model, cycle, folder)
+    except OSError as exc:  # the solve is kept (its row in the summary); the folder as it was
+        return cycle, [], [f"{out / name}: cannot write there ({exc}); nothing was written"]
     return cycle, written, errors
 
 
@@ -229,6 +232,11 @@ def _run(args: argparse.Namespace) -> int:
     except GaitoptInputError as exc:
         print(f"gaitopt.gaits: error: {exc}", file=sys.stderr)
         return 2
+    try:
+        check_output_folder(args.out)  # an unusable --out fails now, not after the solves
+    except GaitoptInputError as exc:
+        print(f"gaitopt.gaits: error: --out {args.out}: {exc}", file=sys.stderr)
+        return 2
     out = Path(args.out)
 
     rows: list[tuple[str, LimitCycle | str | None]] = []
@@ -259,7 +267,7 @@ def _run(args: argparse.Namespace) -> int:
             flush=True,
         )
         for error in errors:
-            print(f"[{k}/{len(names)}] {name}: FIGURE FAILED {error}", flush=True)
+            print(f"[{k}/{len(names)}] {name}: FAILED {error}", flush=True)
         failed |= not cycle.success or bool(errors)
     print()
     print(_summary(rows))

@@ -339,3 +339,25 @@ def test_outside_casadi_an_interrupt_is_raised_at_once():
             signal.raise_signal(signal.SIGINT)
             raise AssertionError("not interrupted")
     assert gaitopt.model("compass_gait")  # the library works on afterwards
+
+
+# -- make gaits: an output folder that cannot be written -----------------------------------------
+def test_make_gaits_refuses_an_unusable_out_before_any_work(tmp_path, capsys, monkeypatch):
+    def never(model):
+        raise AssertionError("solved before --out was checked")
+
+    monkeypatch.setattr(gaits, "find_limit_cycle", never)
+    (tmp_path / "a_file").write_text("keep me")
+    out = str(tmp_path / "a_file" / "results")
+    assert gaits.main(["--out", out, "--models", "vanderpol"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"gaitopt.gaits: error: --out {out}: ") and len(err.splitlines()) == 1
+    assert "is a file" in err and (tmp_path / "a_file").read_text() == "keep me"
+
+
+def test_make_gaits_keeps_a_solved_gait_whose_folder_cannot_be_written(tmp_path):
+    (tmp_path / "a_file").write_text("keep me")  # out/vanderpol would be under a file
+    cycle, written, errors = gaits.run_model("vanderpol", tmp_path / "a_file")
+    assert cycle.success and written == []
+    assert len(errors) == 1 and errors[0].startswith(f"{tmp_path / 'a_file' / 'vanderpol'}: ")
+    assert "cannot write there" in errors[0] and (tmp_path / "a_file").read_text() == "keep me"
