@@ -160,6 +160,12 @@ class Phase:
         The unilateral conditions the physics needs in this phase (see :class:`Constraint`).
         A model that ignores one by convention says so in its docstring (the compass gait's
         mid-swing scuff).
+    limits : mapping of str to tuple of Constraint
+        Optional conditions ``c ≥ 0`` that are no physics but a design's choice (joint limits: a
+        knee that must not hyperextend), by the name an optimiser selects them with
+        (:attr:`gaitopt.optimize.problem.GaitProblem.path_constraints`, ``--constrain NAME``):
+        imposed only on request, never by simulation or continuation.  ``at_start`` /
+        ``at_end`` mark a condition that is 0 there by construction (not imposed at that node).
     """
 
     name: str
@@ -171,6 +177,7 @@ class Phase:
     point_names: tuple[str, ...] = ()
     bodies: ca.Function | None = None
     constraints: tuple[Constraint, ...] = ()
+    limits: Mapping[str, tuple[Constraint, ...]] = field(default_factory=dict)
 
     @property
     def n(self) -> int:
@@ -283,6 +290,11 @@ class HybridModel:
     state_units: ClassVar[dict[str, str]] = {}
     #: Unit of the model's time (``"s"``; ``"1"`` for dimensionless time).
     time_unit: ClassVar[str] = "s"
+    #: Unit of the model's lengths (step length, drawn positions): ``"m"``; ``"l"`` for a
+    #: model in units of its leg length.  Speeds are in ``length_unit/time_unit``.
+    length_unit: ClassVar[str] = "m"
+    #: Unit of the model's energies and work (``"J"``; ``"M*g*l"`` for a dimensionless model).
+    energy_unit: ClassVar[str] = "J"
     #: Rate partner of a coordinate where the naming convention ``q`` → ``q_dot`` does not hold
     #: (the line juggler's ball height ``b`` has rate ``v``; its ``b_dot`` is a held pre-impact
     #: velocity, not a rate): for phase portraits.

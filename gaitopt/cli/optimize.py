@@ -332,7 +332,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         _print_json(report)
     else:
-        _print(report)
+        _print(report, gait.model)
     if lost is not None:  # --out failed after the run: the files went elsewhere, said on stderr
         print(lost, file=sys.stderr)
         return EXIT_BAD_INPUT
@@ -362,37 +362,104 @@ def _weights(args: argparse.Namespace) -> dict[str, Any]:
     return weights
 
 
-def _print(report: dict[str, Any]) -> None:
-    from .output import _print_rows
+# -- the text output (``gaitopt optimize`` without --json) ----------------------------------
+def _print(report: dict[str, Any], model: Any) -> None:
+    """Print the ``--json`` ``report`` of an optimum as text, in the model's declared units.
 
-    rows = [
-        ("model", report["model"]),
-        ("success", report["success"]),
-        ("message", report["message"]),
-        (f"cost ({report['cost_kind']})", report["cost"]),
-        ("period (s)", report["period"]),
-        ("step length (m)", report["step_length"]),
-        ("speed (m/s)", report["speed"]),
-        ("fixed point", report["fixed_point"]),
-        ("multipliers", report["multipliers"]),
+    The style of ``gaitopt solve`` (:mod:`gaitopt.cli.output`): one aligned label column; the
+    fixed point one state a line with its unit; each multiplier as ``re ± im j  |λ| = …``; the
+    ``--free`` parameters at their optimised values; the active constraints; with ``--starts``
+    > 1 the distinct minima and the starts that reached none.
+
+    Parameters
+    ----------
+    report : dict
+        The ``gaitopt optimize --json`` object (:meth:`gaitopt.optimize.OptimalGait.to_json`,
+        messages in the command line's options, ``stabilisation`` with ``--stabilise``).
+    model : HybridModel
+        The optimum's model (its ``--free`` parameters at their optimised values).
+    """
+    from .output import print_block
+
+    print_block(_report_items(report, model))
+
+
+def _report_items(report: dict[str, Any], model: Any) -> list[Any]:
+    """The rows (``(label, value)``) and lines of :func:`_print`, in order."""
+    from .output import (
+        _number,
+        cost_unit,
+        fixed_point_lines,
+        header_rows,
+        multiplier_text,
+        speed_unit,
+        with_unit,
+    )
+
+    def complexes(pairs: list[list[float]]) -> list[complex]:
+        return [complex(re, im) for re, im in pairs]
+
+    kind = report["cost_kind"]
+    cost = cost_unit(model, kind)
+    specs = {spec.name: spec for spec in model.parameter_specs()}
+    items: list[Any] = header_rows(model, report["success"], report["message"])
+    items += [
+        (f"cost ({kind})", with_unit(_number(report["cost"]), cost)),
+        ("period", with_unit(_number(report["period"]), model.time_unit)),
+        ("step length", with_unit(_number(report["step_length"]), model.length_unit)),
+        ("speed", with_unit(_number(report["speed"]), speed_unit(model))),
+    ]
+    for name in report.get("problem", {}).get("free", ()):
+        value = with_unit(_number(report["params"][name]), specs[name].unit)
+        items.append((f"free {name}", f"{value} (optimised)"))
+    if report["fixed_point"]:
+        items.append(f"fixed point (section: {model.section.doc})")
+        items += fixed_point_lines(model, report["fixed_point"])
+    if report["multipliers"]:
+        items.append("multipliers")
+        items += [f"    {multiplier_text(z)}" for z in complexes(report["multipliers"])]
+    error = report["discretisation_error"]
+    items += [
         ("stable", report["stable"]),
-        ("discretisation error", report["discretisation_error"]),
+        ("verified", report["verified"]),
+        ("discretisation error", "None" if error is None else f"{error:.2g} (relative)"),
         ("active constraints", ", ".join(report["active_constraints"]) or "none"),
     ]
-    for i, m in enumerate(report.get("minima", [])):
-        rows.append((f"minimum {i + 1}", f"cost {m['cost']:.10g}, starts {m['starts']}"))
-    for s in report.get("starts", []):  # the starts that reached no minimum, and why
+    minima, starts = report.get("minima", []), report.get("starts", [])
+    if minima or starts:
+        items.append((f"minima ({len(minima)})", f"distinct, from {_count(starts, 'start')}"))
+        for i, m in enumerate(minima, start=1):
+            period = with_unit(_number(m["period"]), model.time_unit)
+            reached = ", ".join(str(k) for k in m["starts"])
+            items.append(
+                f"    {i}. cost {with_unit(_number(m['cost']), cost)}, period {period}, "
+                f"verified {m['verified']}; {'start' if len(m['starts']) == 1 else 'starts'} "
+                f"{reached}"
+            )
+    for s in starts:  # the starts that reached no minimum, and why
         if s["status"] != "converged":
-            rows.append((f"start {s['start']}", f"{s['status']}: {s['message']}"))
+            items.append((f"start {s['start']}", f"{s['status']}: {s['message']}"))
     st = report.get("stabilisation")
     if st is not None:
-        rows.append(("stabilised", st["success"]))
-        rows.append(("  message", st["message"]))
+        items += [("stabilised", st["success"]), ("  message", st["message"])]
         if "gain" in st:
-            rows.append(("  gain K", f"{st['gain']} (δ = −K (s − s*))"))
-            rows.append(("  closed", st["closed_loop_multipliers"]))
-            rows.append(("  measured", st["measured_closed_loop_multipliers"]))
-    _print_rows(rows)
+            columns = ", ".join(st["section_coordinates"])
+            items.append(f"  gain K (δ = −K (s − s*); columns {columns})")
+            for name, row in zip(st["inputs"], st["gain"], strict=True):
+                items.append(f"    {name:<20}{'  '.join(f'{k: .8g}' for k in row)}")
+            for label, key in (
+                ("open loop", "open_loop_multipliers"),
+                ("closed loop", "closed_loop_multipliers"),
+                ("measured closed loop", "measured_closed_loop_multipliers"),
+            ):
+                items.append(f"  {label} multipliers")
+                items += [f"    {multiplier_text(z)}" for z in complexes(st[key])]
+    return items
+
+
+def _count(things: list[Any], noun: str) -> str:
+    """``"1 start"``, ``"2 starts"``."""
+    return f"{len(things)} {noun}{'' if len(things) == 1 else 's'}"
 
 
 def _write(gait: Any, report: dict[str, Any], folder: Path) -> None:

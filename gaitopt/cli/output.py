@@ -56,24 +56,143 @@ def _format_params(params: Mapping[str, float]) -> str:
     return ", ".join(f"{name}={value:g}" for name, value in params.items())
 
 
-def _print_rows(rows: Iterable[tuple[str, Any]]) -> None:
+# -- text rows: one style for every subcommand's result --------------------------------------
+#: The narrowest label column (a label and at least two spaces before its value).
+_MIN_LABEL_WIDTH = 12
+
+
+def _label_width(labels: Iterable[str]) -> int:
+    """The width of a label column: the longest label and two spaces (at least 12)."""
+    return max([_MIN_LABEL_WIDTH - 2, *(len(label) for label in labels)]) + 2
+
+
+def _print_rows(rows: Iterable[tuple[str, Any]], width: int | None = None) -> None:
+    """Print ``label  value`` rows, the values aligned after the widest label (or ``width``)."""
+    rows = list(rows)
+    if width is None:
+        width = _label_width(label for label, _ in rows)
     for label, value in rows:
-        print(f"{label:<12}{value}")
+        print(f"{label:<{width}}{value}")
+
+
+def with_unit(value: str, unit: str | None) -> str:
+    """``value`` followed by its ``unit`` as a model declares it: ``"0.8 s"``, ``"0.3 l"``;
+    a dimensionless ``"1"`` adds nothing, an undeclared unit (None) says so.
+
+    >>> with_unit("0.8", "s"), with_unit("0.2", "1"), with_unit("2", None)
+    ('0.8 s', '0.2', '2 (unit not declared)')
+    """
+    if unit is None:
+        return f"{value} (unit not declared)"
+    return value if unit in ("1", "") else f"{value} {unit}"
+
+
+def _number(value: Any) -> str:
+    """A number to 10 significant digits (``"None"`` for a missing one)."""
+    return "None" if value is None else f"{value:.10g}"
+
+
+def multiplier_text(z: complex) -> str:
+    """A Floquet multiplier as ``re ± im j    |λ| = …``, each to 10 significant digits.
+
+    The parts are padded to the widest a 10-digit number takes, so that a column of
+    multipliers lines up.
+
+    >>> multiplier_text(complex(-1.3407772917484198, 0.0))
+    '-1.340777292     + 0j                |λ| = 1.340777292'
+    >>> multiplier_text(complex(0.5, -0.25))
+    ' 0.5             − 0.25j             |λ| = 0.5590169944'
+    """
+    sign = "−" if z.imag < 0 else "+"
+    real, imag = f"{z.real: .10g}", f"{abs(z.imag):.10g}j"
+    return f"{real:<16} {sign} {imag:<16}  |λ| = {abs(z):.10g}"
+
+
+def fixed_point_lines(model: Any, fixed_point: Mapping[str, float]) -> list[str]:
+    """The fixed point's lines: ``    name   value unit``, one state a line, each with the unit
+    the model declares (:func:`gaitopt.plotting.labels.state_unit`)."""
+    from ..plotting.labels import state_unit
+
+    width = _label_width(fixed_point)
+    return [
+        f"    {name:<{width}}{with_unit(f'{value: .10g}', state_unit(model, name))}"
+        for name, value in fixed_point.items()
+    ]
+
+
+def print_fixed_point(model: Any, fixed_point: Mapping[str, float]) -> None:
+    """Print ``fixed point (section: …)`` and the fixed point, one state a line with its unit."""
+    print(f"fixed point (section: {model.section.doc})")
+    for line in fixed_point_lines(model, fixed_point):
+        print(line)
+
+
+def print_multipliers(multipliers: Iterable[complex]) -> None:
+    """Print ``multipliers`` and each multiplier on its line (:func:`multiplier_text`)."""
+    print("multipliers")
+    for z in multipliers:
+        print(f"    {multiplier_text(complex(z))}")
+
+
+def print_block(items: Iterable[tuple[str, Any] | str]) -> None:
+    """Print rows and lines in order: a ``(label, value)`` row with its value after the label
+    column (one width for every row of the block), a string as it is (a heading, or an indented
+    line of :func:`fixed_point_lines`)."""
+    items = list(items)
+    width = _label_width(item[0] for item in items if not isinstance(item, str))
+    for item in items:
+        if isinstance(item, str):
+            print(item)
+        else:
+            _print_rows([item], width)
+
+
+def speed_unit(model: Any) -> str:
+    """The unit of a speed in ``model``: ``length_unit/time_unit`` (``"m/s"``, ``"l/τ"``)."""
+    time = model.time_unit
+    return model.length_unit if time == "1" else f"{model.length_unit}/{time}"
+
+
+def cost_unit(model: Any, kind: str) -> str:
+    """The unit of an optimised cost in ``model``'s declared units: ``effort`` ∫Σu² dt is
+    (input unit)²·(time unit) over the inputs that act in the flow, ``work`` the model's energy
+    unit, ``cot`` dimensionless (``"1"``); another kind is in the user's units.
+
+    >>> from gaitopt import model
+    >>> cost_unit(model("compass_gait"), "effort"), cost_unit(model("simplest_walker"), "work")
+    ('(N*m)^2*s', 'M*g*l')
+    """
+    if kind == "cot":
+        return "1"
+    if kind == "work":
+        return model.energy_unit
+    if kind != "effort":
+        return "user units"
+    units = dict(zip(model.inputs, model.input_units, strict=False))
+    flowing = {units.get(n) for n in model.inputs if n not in model.impulsive_inputs}
+    time = "" if model.time_unit == "1" else f"*{model.time_unit}"
+    if len(flowing) == 1 and None not in flowing:
+        (unit,) = flowing
+        return f"{time[1:] or '1'}" if unit == "1" else f"({unit})^2{time}"
+    return f"(input unit)^2{time}"
+
+
+def header_rows(model: Any, success: Any, message: str, *rows: tuple[str, Any]) -> list:
+    """The first rows of a result as text: its model and parameters, any ``rows``, then
+    ``success`` and ``message``."""
+    return [
+        ("model", f"{model.name} ({model.title})"),
+        ("params", _format_params(model.params)),
+        *rows,
+        ("success", success),
+        ("message", message),
+    ]
 
 
 def print_header(result: Any, *rows: tuple[str, Any]) -> None:
     """The first lines of a result as text: its model and parameters, any ``rows``, then
     ``success`` and ``message`` (a gait, a branch, a curve)."""
-    model = result.model
-    _print_rows(
-        [
-            ("model", f"{model.name} ({model.title})"),
-            ("params", _format_params(model.params)),
-            *rows,
-            ("success", result.success),
-            ("message", result.message),
-        ]
-    )
+    _print_rows(header_rows(result.model, result.success, result.message, *rows))
 
 
 def write_outputs(out: str | None, write: Callable[[Path], None]) -> str | None:

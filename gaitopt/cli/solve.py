@@ -21,7 +21,15 @@ from .common import (
     build_model,
     parse_guess,
 )
-from .output import _print_json, _print_rows, _solver_output_to_stderr, print_header
+from .output import (
+    _print_json,
+    _print_rows,
+    _solver_output_to_stderr,
+    print_fixed_point,
+    print_header,
+    print_multipliers,
+    with_unit,
+)
 
 
 def _solve_arguments(parser: argparse.ArgumentParser) -> None:
@@ -58,13 +66,10 @@ def _print_cycle(cycle: LimitCycle) -> None:
     print_header(cycle)
     if not cycle.success:
         return
-    _print_rows([("period", f"{cycle.period:.10g} ({cycle.steps} step(s) per orbit)")])
-    print(f"fixed point (section: {model.section.doc})")
-    for name, value in cycle.fixed_point.items():
-        print(f"    {name:<12}{value: .10g}")
-    print("multipliers")
-    for z in cycle.multipliers:
-        print(f"    {z.real: .8f} {z.imag:+.8f}j    |λ| = {abs(z):.8f}")
+    period = with_unit(f"{cycle.period:.10g}", model.time_unit)
+    _print_rows([("period", f"{period} ({cycle.steps} step(s) per orbit)")])
+    print_fixed_point(model, cycle.fixed_point)
+    print_multipliers(cycle.multipliers)
     _print_rows([("stable", cycle.stable), ("verified", cycle.verified)])
     if cycle.route:
         _print_rows([("route", cycle.route)])

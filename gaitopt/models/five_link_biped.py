@@ -77,7 +77,8 @@ unilateral constraint *swing foot above the ground* (``h ≥ 0`` throughout the 
 forbids a mid-swing scuff; OptimTraj imposes no clearance along the step).  A second constraint
 requires the stance foot to push, ``N = n · Σ m_i (r̈_i + g ŷ) ≥ 0``; friction is not modelled.
 The joint limits (OptimTraj's bounds, declared below) and OptimTraj's optional knee limits
-(:attr:`FiveLinkBiped.knee_flexion`) are not imposed by the model: they are an optimiser's.
+(:attr:`FiveLinkBiped.knee_flexion`, the phase's limit ``"knee_flexion"``) are not imposed by
+the model: they are an optimiser's, the knee limits on request.
 
 **Exits** (terminal): a *fall*, the hip reaching the ground line (``n·P2`` falling through 0);
 a *torso fall*, the torso reaching horizontal (``cos q3`` falling through 0, the edge of
@@ -229,6 +230,8 @@ class FiveLinkBiped(HybridModel):
     reference = "Kelly 2017 (SIAM Review 59(4)); OptimTraj demo/fiveLinkBiped"
     inputs = ("stance_knee_torque", "stance_hip_torque", "swing_hip_torque", "swing_knee_torque")
     input_units = ("N*m", "N*m", "N*m", "N*m")
+    #: Absolute link angles (rad); their ``*_dot`` rates are rad/s (for labels).
+    state_units = {q: "rad" for q in LINK_NAMES}
     mesh = (4, 5)
     passive_gait = False
 
@@ -250,10 +253,13 @@ class FiveLinkBiped(HybridModel):
     #: Names of the drawing points whose distance along the ground at heel strike is the step
     #: length (m): from ``stance_foot`` (the origin) to ``swing_foot``.
     step_points: ClassVar[tuple[str, str]] = ("stance_foot", "swing_foot")
-    #: OptimTraj's optional knee joint limits (``pathConstraint.m``; off in the logged runs):
+    #: OptimTraj's optional knee joint limits (``pathConstraint.m``, ``c = (q1 − q2, q5 − q4) ≤ 0``;
+    #: off in the 8c43235 logs, on in the later ``MAIN.m`` of a 0.5 m step in 0.7 s):
     #: ``{knee: (a, b)}`` meaning the flexion ``x[a] − x[b] ≥ 0`` (rad): the stance knee
     #: ``stance_thigh − stance_shank ≥ 0``, the swing knee ``swing_thigh − swing_shank ≥ 0``
-    #: (a knee that does not hyper-extend).  Not imposed by the model.
+    #: (a knee that does not hyper-extend).  Not physics, so not imposed by the model: the phase
+    #: declares them as the limit ``"knee_flexion"`` (``Phase.limits``), which an optimiser
+    #: imposes on request (``path_constraints=("knee_flexion",)``, ``--constrain knee_flexion``).
     knee_flexion: ClassVar[dict[str, tuple[str, str]]] = {
         "stance_knee": ("stance_thigh", "stance_shank"),
         "swing_knee": ("swing_thigh", "swing_shank"),
@@ -360,6 +366,19 @@ class FiveLinkBiped(HybridModel):
             unit="N",
             source="a ground contact can only push (unilateral normal force)",
         )
+        # OptimTraj's optional knee limits (pathConstraint.m), for an optimiser to select.
+        flexion = tuple(
+            sym.constraint(
+                f"{knee.replace('_', ' ')} flexion",
+                x,
+                states[STATE_NAMES.index(a)] - states[STATE_NAMES.index(b)],
+                f"{knee.replace('_', ' ')} hyperextends",
+                unit="rad",
+                source="a knee that does not hyperextend (OptimTraj demo/fiveLinkBiped "
+                "pathConstraint.m)",
+            )
+            for knee, (a, b) in cls.knee_flexion.items()
+        )
         energy = sym.conserved(
             "energy", x, kinetic_energy(masses, q, qd) + potential_energy(masses, g)
         )
@@ -374,6 +393,7 @@ class FiveLinkBiped(HybridModel):
             point_names=POINT_NAMES,
             bodies=bodies_function(masses, x, q, qd, sym.p),
             constraints=(clearance, push),
+            limits={"knee_flexion": flexion},
         )
 
         # -- section: just after heel strike, the trailing foot on the ground behind ------------

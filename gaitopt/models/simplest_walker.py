@@ -68,6 +68,8 @@ class SimplestWalker(HybridModel):
         "phi_dot": "rad/τ",
     }  # for axis labels
     time_unit = "τ"  # dimensionless time τ = t·sqrt(g/l)
+    length_unit = "l"  # lengths in leg lengths (l = 1)
+    energy_unit = "M*g*l"  # energies and work in units of M·g·l (Kuo 2002)
     title = "Simplest walking model"
     reference = "Garcia, Chatterjee, Ruina & Coleman 1998; Kuo 2002 (actuation)"
     inputs = ("hip_torque", "push_off")

@@ -13,16 +13,19 @@ Modules, one figure family each: :mod:`~gaitopt.plotting.portrait` (phase portra
 :mod:`~gaitopt.plotting.bifurcation` (bifurcation diagrams of a branch); shared by them:
 :mod:`~gaitopt.plotting.labels` (units and axis labels) and :mod:`~gaitopt.plotting.save`
 (:func:`save_figure`).
+
+The figure functions are imported on first use (PEP 562): :mod:`~gaitopt.plotting.labels` needs
+no matplotlib, so the command line's text output reads the models' units from it without
+importing matplotlib.
 """
 
 from __future__ import annotations
 
-from .bifurcation import plot_branch
+from importlib import import_module
+from typing import Any
+
 from .labels import coordinate_pairs, state_label, state_unit, unit_label
 from .labels import time_label as time_label  # public, not in __all__ (as before)
-from .portrait import plot_phase_portrait
-from .save import save_figure
-from .staircase import plot_return_map
 
 __all__ = [
     "plot_phase_portrait",
@@ -35,5 +38,26 @@ __all__ = [
     "unit_label",
 ]
 
+#: The figure functions, each imported from its module on first use.
+_LAZY = {
+    "plot_phase_portrait": ".portrait",
+    "plot_return_map": ".staircase",
+    "plot_branch": ".bifurcation",
+    "save_figure": ".save",
+}
+
 # The docstring examples of the submodules run with this package's (``doctest.testmod``).
 __test__ = {"coordinate_pairs": coordinate_pairs}
+
+
+def __getattr__(name: str) -> Any:
+    """A figure function of :data:`_LAZY`, imported from its module (with matplotlib)."""
+    if name in _LAZY:
+        value = getattr(import_module(_LAZY[name], __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY})
