@@ -1,10 +1,13 @@
 """Which constraints of an optimal gait are active, and which one a failed solve cannot meet
-(the ``active_constraints`` of a result; the message of an infeasible problem)."""
+(the ``active_constraints`` of a result; the message of an infeasible problem).  An input bound
+of a least-effort optimum solved with the arcs of its bounds (:func:`gaitopt.optimize.arcs.
+detect_bound_arcs`) is listed with its saturated arcs: ``"hip_torque = -4 on [0, 0.408] s"``."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from .arcs import bound_arcs_of
 from .collocation import Collocation
 
 
@@ -59,6 +62,9 @@ def _active(col: Collocation, w: np.ndarray, p: np.ndarray) -> list[str]:
                 label = f"{low:g} <= {state} <= {high:g}"
                 if hit and label not in out:
                     out.append(label)
+    # The arcs of active input bounds (least effort's exact stage): where each input sits at
+    # its bound, after the bound itself.
+    out.extend(bound_arcs_of(col, w, p))
     if problem.free:
         values = B.get(w, "free").ravel()
         lo, hi = problem.free_bounds()

@@ -204,3 +204,117 @@ def _merge_blips(arcs: list[tuple[float, Any]], shortest: float) -> list[tuple[f
         else:
             joined.append((f, signs))
     return joined
+
+
+# -- the arcs of active input bounds (costs without powers: least effort) ----------------------
+
+#: An input is at its bound at a node of the first solution within this fraction of its range
+#: (its bound's size for a one-sided range).  Least effort is strictly convex in the input, so
+#: the first solution leaves no input wandering near a bound: IPOPT puts the nodes on a bound
+#: to ~1e-11 of it, and a free node this close is within ~1e-6 of the phase of the junction.
+BOUND_TOL = 1e-6
+
+
+def detect_bound_arcs(
+    col: Collocation, w: np.ndarray, p: np.ndarray, intervals: int = ARC_INTERVALS
+) -> list[list[Arc]] | None:
+    """Arcs of active input bounds read off a first solution of a cost without powers
+    (least effort): maximal runs of nodes on which every input keeps its side (at its upper
+    bound ``+1``, its lower ``−1``, free ``0``), the junction put halfway between the last node
+    of a run and the first of the next; None if no input reaches a bound at any node (the
+    inactive bound leaves the transcription alone).
+
+    Impulsive inputs (one value per step) and inputs switched off by their bounds are free
+    throughout (already constant).  Each arc gets at least ``intervals`` mesh intervals; a
+    phase gets at least as many as ``col`` has (the extra ones go to the longest arcs per
+    interval), and every phase the same count.  The arcs' ``signs`` are empty: the
+    transcription reads only their ``bounds`` (:meth:`Collocation._bound_arcs`)."""
+    sol = col.unpack(w, p)
+    low, high = col.problem.input_bounds()
+    n_u = len(low)
+    finite = np.isfinite(low) | np.isfinite(high)
+    span = np.where(
+        np.isfinite(low) & np.isfinite(high),
+        high - low,
+        np.where(np.isfinite(high), np.abs(high), np.abs(low)),
+    )
+    span = np.where(span > 0, span, 1.0)
+    usable = finite & (high > low)
+    usable[list(col.problem.impulsive_index)] = False
+    if not np.any(usable):
+        return None
+    per_phase, touched = [], False
+    for k in range(len(col.chain)):
+        U = sol["U"][k]
+        tol = (BOUND_TOL * span)[:, None]
+        side = np.where(U >= high[:, None] - tol, 1, np.where(U <= low[:, None] + tol, -1, 0))
+        side[~usable, :] = 0
+        touched = touched or bool(np.any(side))
+        times = col.node_times(sol["breaks"][k])[1:]
+        runs: list[list] = []
+        for c in range(side.shape[1]):
+            key = tuple(int(v) for v in side[:, c])
+            if runs and runs[-1][2] == key:
+                runs[-1][1] = c
+            else:
+                runs.append([c, c, key])
+        arcs, start = [], 0.0
+        for a, b in zip(runs[:-1], runs[1:], strict=True):
+            switch = 0.5 * (times[a[1]] + times[b[0]])
+            arcs.append((switch - start, a[2]))
+            start = switch
+        arcs.append((1.0 - start, runs[-1][2]))
+        per_phase.append(arcs)
+    if not touched:
+        return None
+    most = max(len(a) for a in per_phase)
+    total = max(intervals * most, col.N)
+    structure = []
+    for arcs in per_phase:
+        counts = [intervals] * len(arcs)
+        for _ in range(total - sum(counts)):  # to the arc with the longest intervals
+            j = int(np.argmax([f / n for (f, _), n in zip(arcs, counts, strict=True)]))
+            counts[j] += 1
+        structure.append(
+            [
+                Arc(n, (), max(f, 1e-3), side if any(side) else (0,) * n_u)
+                for n, (f, side) in zip(counts, arcs, strict=True)
+            ]
+        )
+    return structure
+
+
+def describe_bounds(structure: list[list[Arc]], inputs: tuple[str, ...] | list[str]) -> str:
+    """``[free hi free lo]`` per phase (per input, joined by ``/`` when there are several:
+    ``hi``, ``lo`` at its upper or lower bound, ``free`` inside)."""
+    words = {1: "hi", -1: "lo", 0: "free"}
+    phases = []
+    for arcs in structure:
+        phases.append(
+            " ".join(
+                "/".join(words[int(b)] for b in (a.bounds or (0,) * len(inputs))) for a in arcs
+            )
+        )
+    return "; ".join(f"[{p}]" for p in phases)
+
+
+def bound_arcs_of(col: Collocation, w: np.ndarray, p: np.ndarray) -> list[str]:
+    """The saturated arcs of a solved transcription with arcs of input bounds, for the active
+    set: ``"hip_torque = 4 on [0.1234, 0.2345] s"`` (time since the section), one per arc and
+    input at a bound; empty without such a structure."""
+    if col.structure is None or col.problem.cost_kind in ("work", "cot"):
+        return []
+    sol = col.unpack(w, p)
+    low, high = col.problem.input_bounds()
+    names = col.model.inputs
+    out, t0 = [], 0.0
+    for k, arcs in enumerate(col.structure):
+        theta = col.theta_of(w, k)
+        edges = t0 + sol["T"][k] * np.concatenate([[0.0], np.cumsum(theta)])
+        for a, arc in enumerate(arcs):
+            for r, b in enumerate(arc.bounds):
+                if b:
+                    value = high[r] if b > 0 else low[r]
+                    out.append(f"{names[r]} = {value:g} on [{edges[a]:.6g}, {edges[a + 1]:.6g}] s")
+        t0 += sol["T"][k]
+    return out

@@ -144,8 +144,12 @@ class Collocation:
         ulo, uhi = problem.input_bounds()
         work = problem.cost_kind in ("work", "cot")
         if structure is not None:
-            if not work or len(structure) != len(self.chain):
-                raise GaitoptInputError("Collocation: a structure needs a work cost, one per phase")
+            if len(structure) != len(self.chain):
+                raise GaitoptInputError("Collocation: a structure needs arcs for every phase")
+            if not work and not any(any(a.bounds) for arcs in structure for a in arcs):
+                raise GaitoptInputError(
+                    "Collocation: the arcs of a cost without powers are those of input bounds"
+                )
             for arcs in structure:
                 if sum(a.intervals for a in arcs) != N:
                     raise GaitoptInputError(
@@ -387,6 +391,8 @@ class Collocation:
                 work_terms.append(ca.mtimes(ca.sum1(positive * power), wq))
                 work_terms.append(problem.impulse_work(i, x_end, u_end, p))
             else:
+                if structure is not None:  # the arcs of active input bounds
+                    self._bound_arcs(k, Xk, Uk, p, label, add)
                 L = ca.vertcat(*[problem.integrand(i, Xc[:, c], Uk[:, c], p) for c in range(N * d)])
                 cost_terms.append(hq * ca.mtimes(L.T, wq))
 
@@ -433,6 +439,34 @@ class Collocation:
         }
         self._X, self._U, self._T = X, U, T
         self._theta = Th
+
+    def _bound_arcs(self, k: int, Xk: Any, Uk: Any, p: Any, label: str, add: Any) -> None:
+        """The arcs of active input bounds for a cost without powers (least effort): on an
+        arc where an input sits at its bound (``Arc.bounds``; ``Arc.signs`` are not read) its
+        values at the arc's points are fixed there (``u ≡ bound``: fixed variables), on the
+        others it is collocated as usual and keeps its bounds between the nodes (the
+        midpoints) too, so the kink where it meets the bound is an arc boundary."""
+        N, d, B = self.N, self.d, self.blocks
+        ulo, uhi = self.problem.input_bounds()
+        n_u = len(self.model.inputs)
+        bangs = np.array(
+            [a.bounds or (0,) * n_u for a in self.structure[k] for _ in range(a.intervals)],
+            dtype=int,
+        ).T  # n_u × N
+        fixed = np.where(bangs > 0, uhi[:, None], np.where(bangs < 0, ulo[:, None], np.nan))
+        slot = B.names.index(f"U{k}")
+        values = np.repeat(fixed, d, axis=1).ravel(order="F")
+        keep = np.isnan(values)
+        B.lb[slot] = np.where(keep, B.lb[slot], values)
+        B.ub[slot] = np.where(keep, B.ub[slot], values)
+        mids = 0.5 * (self.tau[:-1] + self.tau[1:])
+        Lu = ca.DM(lagrange_matrix(self.tau[1:], mids).T)
+        us = ca.horzcat(*[ca.mtimes(Uk[:, j * d : (j + 1) * d], Lu) for j in range(N)])
+        for r in range(n_u):
+            free_nodes = [c for c in range(N * d) if np.isnan(fixed[r, c // d])]
+            if (np.isfinite(ulo[r]) or np.isfinite(uhi[r])) and ulo[r] < uhi[r] and free_nodes:
+                name = f"|{self.model.inputs[r]}| between nodes ({label})"
+                add(name, us[r, free_nodes], ulo[r], uhi[r])
 
     def _idle_inputs(self, phase: int) -> list[int]:
         """Inputs whose rate (:meth:`~gaitopt.HybridModel.input_rates`) is identically zero in

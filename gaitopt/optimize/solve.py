@@ -23,7 +23,7 @@ from ..arguments import check_count, check_positive
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
 from .active import _active, _violation
-from .arcs import _describe, detect_structure, structure_of
+from .arcs import _describe, describe_bounds, detect_bound_arcs, detect_structure, structure_of
 from .certify import _certify
 from .collocation import Arc, Collocation, RadauMesh
 from .guess import NoStart, _start_guess, check_warm_start
@@ -551,6 +551,21 @@ def _finish(
             )
         col, w, stats = exact, w_exact, stats_exact
         structure_note = f"; arcs of the power signs {_describe(structure)}"
+    elif (structure := detect_bound_arcs(col, w, p)) is not None:
+        # An active input bound: arcs with the input at its bound and free junction times
+        # (the kink where it meets the bound is no longer inside a mesh interval).
+        arcs = describe_bounds(structure, problem.model.inputs)
+        exact = _collocation(problem, RadauMesh(sum(a.intervals for a in structure[0]), col.d),
+                             structure)  # fmt: skip
+        w_exact, stats_exact = _run(exact, exact.from_solution(col, w, p), p)
+        if _converged(stats_exact):
+            col, w, stats = exact, w_exact, stats_exact
+            structure_note = f"; arcs of the input bounds {arcs}"
+        else:
+            structure_note = (
+                f"; the arcs of the input bounds {arcs} did not converge "
+                f"({stats_exact.get('return_status')}): refined without them"
+            )
     sol = col.unpack(w, p)
     cost_error = orbit_error = float("inf")
     refinements = 0
