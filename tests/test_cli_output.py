@@ -189,4 +189,83 @@ def test_output_helpers_doctests():
     import gaitopt.cli.output as output
 
     result = doctest.testmod(output)
-    assert result.attempted >= 5 and result.failed == 0
+    assert result.attempted >= 3 and result.failed == 0
+
+
+# -- gaitopt optimize --out: figures ------------------------------------------------------------
+@pytest.fixture(scope="module")
+def compass_figures(tmp_path_factory):
+    """The figures ``gaitopt optimize compass_gait ... --out`` saves, by file name (the animation
+    is left out: it takes longer than the optimisation)."""
+    import gaitopt.animation
+    import gaitopt.plotting
+
+    saved = {}
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(gaitopt.plotting, "save_figure", lambda fig, path: saved.update({
+            path.name: fig}))  # fmt: skip
+        patch.setattr(gaitopt.animation, "animate_walker", lambda *a, **k: None)
+        capture = _Capture()
+        out = tmp_path_factory.mktemp("optimal")
+        status = capture.run("optimize", "compass_gait", *_FIXED, "--out", str(out))
+    assert status == 0, capture.out
+    return saved
+
+
+def axis_labels(fig) -> list[tuple[str, str]]:
+    """``(xlabel, ylabel)`` of every axis of ``fig``."""
+    return [(ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes]
+
+
+def test_orbit_figure_has_an_axis_per_unit(compass_figures):
+    labels = axis_labels(compass_figures["orbit.png"])
+    assert len(labels) >= 2  # angles and rates apart (they shared one axis)
+    ylabels = [y for _, y in labels]
+    assert ylabels == ["angle stance, swing (rad)", "angular rate stance_dot, swing_dot (rad/s)"]
+    assert labels[-1][0] == "time t since the section (s)"
+
+
+def test_inputs_figure_labelled_with_the_input_unit(compass_figures):
+    labels = axis_labels(compass_figures["inputs.png"])
+    assert [y for _, y in labels] == ["torque hip_torque (N*m)"]
+    assert labels[-1][0] == "time t since the section (s)"
+
+
+def test_figures_of_a_dimensionless_gait_in_its_units():
+    import matplotlib.pyplot as plt
+
+    import gaitopt
+    from gaitopt.plotting import plot_optimal_inputs, plot_optimal_orbit
+
+    walker = gaitopt.model("simplest_walker", slope=0.0)
+    gait = gaitopt.optimize_gait(walker, "effort", period=3.5)  # not certified: drawn anyway
+    assert gait.orbit and gait.inputs, gait.message
+    (orbit, _), (inputs, _) = plot_optimal_orbit(gait), plot_optimal_inputs(gait)
+    try:
+        orbit_labels, input_labels = axis_labels(orbit), axis_labels(inputs)
+    finally:
+        plt.close(orbit)
+        plt.close(inputs)
+    assert [y for _, y in orbit_labels] == [
+        "angle theta, phi (rad)",
+        "angular rate theta_dot, phi_dot (rad/τ)",
+    ]
+    assert [y for _, y in input_labels] == [
+        "torque hip_torque (M*g*l)",
+        "impulse push_off (M*sqrt(g*l))",
+    ]
+    for labels in (orbit_labels, input_labels):  # one shared time axis, at the bottom
+        assert [x for x, _ in labels] == ["", "time t since the section (τ, dimensionless)"]
+    for x, y in orbit_labels + input_labels:
+        for si in ("(m)", "(s)", "N·m", "N*m", "(m/s)"):
+            assert si not in y and si not in x
+    assert "(M*g*l)^2*τ" in inputs.axes[0].get_title()
+
+
+def test_labels_doctests():
+    import gaitopt.plotting.labels
+    import gaitopt.plotting.optimal
+
+    for module in (gaitopt.plotting.labels, gaitopt.plotting.optimal):
+        result = doctest.testmod(module)
+        assert result.attempted >= 1 and result.failed == 0

@@ -4,6 +4,7 @@
 
     gaitopt optimize MODEL [--set NAME=VALUE ...] [--cost effort|work|cot] [--fix period=S]
                            [--fix step_length=M] [--fix speed=V] [--bound INPUT=MAX ...]
+                           [--bound STATE=LOW:HIGH ...] [--constrain LIMIT ...]
                            [--free PARAM ...] [--steps K] [--starts N] [--seed S] [--tol TOL]
                            [--scheduler ADDRESS] [--stabilise [--q Q] [--r R] [--orbits N]]
                            [--library NAME=FIRST:LAST:COUNT [--cold K]] [--json] [--out DIR]
@@ -15,7 +16,16 @@ INPUT: [...]}`` over one orbit), ``multipliers`` (``[re, im]``), ``stable``, ``v
 ``starts``.  Bounds the model declares (``input_bounds``, ``state_bounds``: the five-link
 biped's |u| ≤ 100 N·m, |q| ≤ π/2, |q̇| ≤ 10) apply unless ``--bound`` overrides an input's:
 ``--bound INPUT=MAX`` for |u| ≤ MAX (0 switches the input off), ``--bound INPUT=LOW:HIGH`` for
-LOW ≤ u ≤ HIGH (within what the model declares: Kuo's push-off only pushes).  ``--out DIR`` writes
+LOW ≤ u ≤ HIGH (within what the model declares: Kuo's push-off only pushes).  A name that is a
+state (of any phase) bounds the state: ``--bound STATE=LOW:HIGH`` for LOW ≤ x ≤ HIGH (LOW < HIGH;
+one side may be left empty, ``--bound q3=0:``), ``--bound STATE=MAX`` for |x| ≤ MAX, in state
+units, at every collocation node of each phase with that state and checked on dense samples of
+the optimum; it replaces the model's declared bound of that state.  ``--constrain LIMIT``
+imposes a limit the model declares (``Phase.limits``; ``--constrain knee_flexion``: the five-link
+biped's and the kneed walker's knees must not hyperextend), off unless given.  The JSON's
+``active_constraints`` names each active state bound or limit with its phase (``x <= 2
+(single support)``) and ``active_spans`` gives when, ``{label: [[t_first, t_last], ...]}`` (s
+since the section).  ``--out DIR`` writes
 ``optimal.json``, ``inputs.csv``, ``orbit.png``, ``inputs.png`` and ``gait.gif``.  Exit status
 0 optimal gait found and verified, 1 none (the JSON is still printed), 2 bad input.
 
@@ -80,6 +90,10 @@ _CLI_ADVICE = (
     (r"\b(starts|seed|steps|tol)=([\d.e+-]+)", r"--\1 \2"),
     (r"`(period|step_length|speed)`", r"--fix \1"),
     (r"`bounds(\[[^]]*\])?`", "--bound"),
+    (r"state_bounds=\{'(\w+)': \((-?[\w.e+-]+), (-?[\w.e+-]+)\)\}", r"--bound \1=\2:\3"),
+    (r"`state_bounds(\[[^]]*\])?`", "--bound"),
+    (r"path_constraints=\('(\w+)',\)", r"--constrain \1"),
+    (r"`path_constraints`", "--constrain"),
     (r"`(cost|starts|seed|steps|tol|free|scheduler)`", r"--\1"),
 )
 
@@ -141,9 +155,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--bound",
         action="append",
-        metavar="INPUT=MAX",
-        help="|INPUT| <= MAX at every collocation point (input units; 0 switches the input "
-        "off), or INPUT=LOW:HIGH; repeatable",
+        metavar="NAME=LOW:HIGH",
+        help="INPUT=MAX: |INPUT| <= MAX at every collocation point (input units; 0 switches the "
+        "input off), INPUT=LOW:HIGH; or STATE=LOW:HIGH (STATE=MAX: |STATE| <= MAX), a joint or "
+        "rate limit in state units; repeatable",
+    )
+    parser.add_argument(
+        "--constrain",
+        action="append",
+        metavar="LIMIT",
+        help="impose a path constraint the model declares, e.g. knee_flexion (five_link_biped, "
+        "kneed_walker: knees that do not hyperextend); repeatable",
     )
     parser.add_argument(
         "--free", action="append", metavar="PARAM", help="optimise this parameter too"
@@ -236,7 +258,15 @@ def _parse(args: argparse.Namespace, model: Any) -> dict[str, Any]:
         for n, (lo, hi) in model.input_bounds.items()
         if math.isfinite(lo) and math.isfinite(hi)
     }
-    bounds.update(_bounds(args.bound, model))
+    inputs, states = _bounds(args.bound, model)
+    bounds.update(inputs)
+    state_bounds = {**dict(model.state_bounds), **states}
+    paths = _constrain(args.constrain, model)
+    if paths and args.library is not None:
+        raise InputError(
+            f"--constrain {paths[0]}: a --library does not take path constraints yet; "
+            f"drop --constrain or --library"
+        )
     free = tuple(args.free or ())
     for name in free:
         if name not in model.params:
@@ -247,24 +277,59 @@ def _parse(args: argparse.Namespace, model: Any) -> dict[str, Any]:
     return {
         **{name: value for name, (_, value) in fixed.items()},
         "bounds": bounds,
-        "state_bounds": dict(model.state_bounds),
+        "state_bounds": state_bounds,
+        **({"path_constraints": paths} if paths else {}),
         "free": free,
         "tol": args.tol,
     }
 
 
-def _bounds(items: list[str] | None, model: Any) -> dict[str, Any]:
-    """``--bound INPUT=MAX`` (``|u| <= MAX``; 0 switches the input off) or ``INPUT=LOW:HIGH``."""
+def _constrain(items: list[str] | None, model: Any) -> tuple[str, ...]:
+    """``--constrain LIMIT``: limits the model declares (``Phase.limits``), each once."""
+    from ..optimize.problem import declared_limits
+    from .common import InputError
+
+    declared = declared_limits(model)
+    names: list[str] = []
+    for item in items or ():
+        name = item.strip()
+        if name not in declared:
+            have = (
+                f"its limits: {', '.join(declared)}"
+                if declared
+                else "it declares none (Phase.limits)"
+            )
+            raise InputError(
+                f"--constrain {item}: {model.name} has no limit {name!r}; "
+                f"{did_you_mean(name, declared) if declared else ''}{have}"
+            )
+        if name not in names:
+            names.append(name)
+    return tuple(names)
+
+
+def _bounds(items: list[str] | None, model: Any) -> tuple[dict[str, Any], dict[str, Any]]:
+    """``--bound INPUT=MAX`` (``|u| <= MAX``; 0 switches the input off) or ``INPUT=LOW:HIGH``;
+    ``--bound STATE=LOW:HIGH`` (an empty side: unbounded there) or ``STATE=MAX``: the input
+    bounds and the state bounds."""
+    from ..optimize.problem import all_state_names
     from .common import InputError, _number, _split
 
+    states = all_state_names(model)
     examples = {n: f"{n}=10" for n in model.inputs} or {"INPUT": "INPUT=10"}
+    examples.update({n: f"{n}=-1:1" for n in states})
     bounds: dict[str, Any] = {}
+    state_bounds: dict[str, tuple[float, float]] = {}
     for item in items or ():
         name, text = _split("--bound", item, examples)
+        if name not in model.inputs and name in states:
+            state_bounds[name] = _state_bound(item, name, text)
+            continue
         if name not in model.inputs:
             raise InputError(
-                f"--bound {item}: {model.name} has no input {name!r}; "
-                f"{did_you_mean(name, model.inputs)}inputs: {', '.join(model.inputs) or 'none'}"
+                f"--bound {item}: {model.name} has no input or state {name!r}; "
+                f"{did_you_mean(name, (*model.inputs, *states))}inputs: "
+                f"{', '.join(model.inputs) or 'none'}; states: {', '.join(states)}"
             )
         example = f"--bound {name}=10 (|u| <= 10), {name}=0 (off) or {name}=0:10"
         if ":" in text:
@@ -279,7 +344,31 @@ def _bounds(items: list[str] | None, model: Any) -> dict[str, Any]:
             if not value >= 0:
                 raise InputError(f"--bound {item}: the bound must be >= 0; e.g. {example}")
             bounds[name] = value
-    return bounds
+    return bounds, state_bounds
+
+
+def _state_bound(item: str, name: str, text: str) -> tuple[float, float]:
+    """``--bound STATE=LOW:HIGH`` (LOW < HIGH; an empty side is unbounded) or ``STATE=MAX``
+    (``|x| <= MAX``, MAX > 0)."""
+    from .common import InputError, _number
+
+    example = f"--bound {name}=-0.5:0.5 (-0.5 <= {name} <= 0.5), {name}=0: or {name}=0.5"
+    if ":" not in text:
+        value = _number("--bound", item, text, f"{name}=0.5")
+        if not value > 0:
+            raise InputError(f"--bound {item}: a state's MAX must be > 0; e.g. {example}")
+        return -value, value
+    low_text, _, high_text = (part.strip() for part in text.partition(":"))
+    if not low_text and not high_text:
+        raise InputError(f"--bound {item}: give LOW, HIGH or both; e.g. {example}")
+    low = _number("--bound", item, low_text, f"{name}=-0.5:0.5") if low_text else -math.inf
+    high = _number("--bound", item, high_text, f"{name}=-0.5:0.5") if high_text else math.inf
+    if not low < high:
+        raise InputError(
+            f"--bound {item}: a state's LOW must be below its HIGH (got {low:g} >= {high:g}); "
+            f"e.g. {example}"
+        )
+    return low, high
 
 
 def run(args: argparse.Namespace) -> int:
@@ -313,6 +402,8 @@ def run(args: argparse.Namespace) -> int:
             raise
         raise InputError(f"--scheduler {args.scheduler}: cannot reach it ({exc})") from None
     report = gait.to_json(minima=args.starts > 1)
+    if getattr(gait, "active_spans", None) is not None:  # when the state bounds and limits bind
+        report["active_spans"] = gait.active_spans
     report["message"] = for_the_cli(report["message"])
     for entry in (*report.get("minima", ()), *report.get("starts", ())):
         entry["message"] = for_the_cli(entry["message"])
@@ -386,15 +477,8 @@ def _print(report: dict[str, Any], model: Any) -> None:
 
 def _report_items(report: dict[str, Any], model: Any) -> list[Any]:
     """The rows (``(label, value)``) and lines of :func:`_print`, in order."""
-    from .output import (
-        _number,
-        cost_unit,
-        fixed_point_lines,
-        header_rows,
-        multiplier_text,
-        speed_unit,
-        with_unit,
-    )
+    from ..plotting.labels import cost_unit, speed_unit
+    from .output import _number, fixed_point_lines, header_rows, multiplier_text, with_unit
 
     def complexes(pairs: list[list[float]]) -> list[complex]:
         return [complex(re, im) for re, im in pairs]
@@ -467,12 +551,12 @@ def _write(gait: Any, report: dict[str, Any], folder: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     from ..animation import animate_walker
     from ..files import write_csv, write_json
     from ..optimize.verify import feedforward_of
     from ..plotting import save_figure
+    from ..plotting.optimal import plot_optimal_inputs, plot_optimal_orbit
     from ..simulation import simulate
 
     folder.mkdir(parents=True, exist_ok=True)
@@ -482,27 +566,11 @@ def _write(gait: Any, report: dict[str, Any], folder: Path) -> None:
     names = list(gait.model.inputs)
     time = gait.inputs["time"]
     rows = zip(time, *[gait.inputs[n] for n in names], strict=True)
-    write_csv(["time_s", *names], rows, folder / "inputs.csv")
-    units = dict(zip(names, gait.model.input_units or ("",) * len(names), strict=False))
-
-    fig, ax = plt.subplots(figsize=(7, 4))
-    for n in names:
-        ax.plot(time, gait.inputs[n], label=f"{n} ({units.get(n, '')})")
-    ax.set_xlabel("time since heel strike t (s)")
-    ax.set_ylabel("input u(t) (N·m)")
-    ax.set_title(f"{gait.model.title}: optimal input, {gait.cost_kind} {gait.cost:.6g}")
-    ax.legend(fontsize=8)
-    save_figure(fig, folder / "inputs.png")
-
-    fig, ax = plt.subplots(figsize=(7, 4))
-    for arc in gait.orbit:
-        for j, state in enumerate(arc.states):
-            ax.plot(arc.t, arc.x[j], label=state if arc is gait.orbit[0] else None)
-    ax.set_xlabel("time since heel strike t (s)")
-    ax.set_ylabel("state x (rad, rad/s)")
-    ax.set_title(f"{gait.model.title}: optimal orbit over one period")
-    ax.legend(fontsize=7, ncol=2)
-    save_figure(fig, folder / "orbit.png")
+    unit = gait.model.time_unit  # "time_s"; "time_τ" in dimensionless time
+    write_csv([f"time_{unit}" if unit != "1" else "time", *names], rows, folder / "inputs.csv")
+    save_figure(plot_optimal_inputs(gait)[0], folder / "inputs.png")
+    if gait.orbit:
+        save_figure(plot_optimal_orbit(gait)[0], folder / "orbit.png")
 
     if gait.success:
         x0 = gait.model.state_vector(gait.fixed_point)

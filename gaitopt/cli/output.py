@@ -147,36 +147,6 @@ def print_block(items: Iterable[tuple[str, Any] | str]) -> None:
             _print_rows([item], width)
 
 
-def speed_unit(model: Any) -> str:
-    """The unit of a speed in ``model``: ``length_unit/time_unit`` (``"m/s"``, ``"l/τ"``)."""
-    time = model.time_unit
-    return model.length_unit if time == "1" else f"{model.length_unit}/{time}"
-
-
-def cost_unit(model: Any, kind: str) -> str:
-    """The unit of an optimised cost in ``model``'s declared units: ``effort`` ∫Σu² dt is
-    (input unit)²·(time unit) over the inputs that act in the flow, ``work`` the model's energy
-    unit, ``cot`` dimensionless (``"1"``); another kind is in the user's units.
-
-    >>> from gaitopt import model
-    >>> cost_unit(model("compass_gait"), "effort"), cost_unit(model("simplest_walker"), "work")
-    ('(N*m)^2*s', 'M*g*l')
-    """
-    if kind == "cot":
-        return "1"
-    if kind == "work":
-        return model.energy_unit
-    if kind != "effort":
-        return "user units"
-    units = dict(zip(model.inputs, model.input_units, strict=False))
-    flowing = {units.get(n) for n in model.inputs if n not in model.impulsive_inputs}
-    time = "" if model.time_unit == "1" else f"*{model.time_unit}"
-    if len(flowing) == 1 and None not in flowing:
-        (unit,) = flowing
-        return f"{time[1:] or '1'}" if unit == "1" else f"({unit})^2{time}"
-    return f"(input unit)^2{time}"
-
-
 def header_rows(model: Any, success: Any, message: str, *rows: tuple[str, Any]) -> list:
     """The first rows of a result as text: its model and parameters, any ``rows``, then
     ``success`` and ``message``."""

@@ -10,7 +10,8 @@ and Garcia's simplest walker (``τ = t·sqrt(g/l)``).
 
 Modules, one figure family each: :mod:`~gaitopt.plotting.portrait` (phase portraits),
 :mod:`~gaitopt.plotting.staircase` (staircase plots of 1-D return maps),
-:mod:`~gaitopt.plotting.bifurcation` (bifurcation diagrams of a branch); shared by them:
+:mod:`~gaitopt.plotting.bifurcation` (bifurcation diagrams of a branch),
+:mod:`~gaitopt.plotting.optimal` (an optimal gait's states and inputs); shared by them:
 :mod:`~gaitopt.plotting.labels` (units and axis labels) and :mod:`~gaitopt.plotting.save`
 (:func:`save_figure`).
 
@@ -36,6 +37,8 @@ __all__ = [
     "state_unit",
     "state_label",
     "unit_label",
+    "plot_optimal_orbit",
+    "plot_optimal_inputs",
 ]
 
 #: The figure functions, each imported from its module on first use.
@@ -44,6 +47,8 @@ _LAZY = {
     "plot_return_map": ".staircase",
     "plot_branch": ".bifurcation",
     "save_figure": ".save",
+    "plot_optimal_orbit": ".optimal",
+    "plot_optimal_inputs": ".optimal",
 }
 
 # The docstring examples of the submodules run with this package's (``doctest.testmod``).
