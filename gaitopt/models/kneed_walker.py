@@ -343,6 +343,19 @@ class KneedWalker(HybridModel):
         energy0 = sym.conserved(
             "energy", x0, kinetic_energy(masses0, q, qd) + potential_energy(masses0, g)
         )
+        # The swing knee must not hyperextend, q3 − q2 ≥ 0 (0 where the phase begins, the knee
+        # released straight, and at knee strike): an optimiser's limit, on request.  It is the
+        # knee strike guard's side, which the optimiser keeps anyway at the interior nodes.
+        flexion = sym.constraint(
+            "swing knee flexion",
+            x0,
+            q3 - q2,
+            "swing knee hyperextends",
+            at_start=True,
+            at_end=True,
+            unit="rad",
+            source="a knee that does not hyperextend (the knee locks at q3 = q2; Hsu Chen 2007)",
+        )
         phase0 = Phase(
             "three-link swing",
             names0,
@@ -353,6 +366,7 @@ class KneedWalker(HybridModel):
             point_names=POINT_NAMES,
             bodies=bodies_function(masses0, x0, q, qd, sym.p),
             constraints=constraints0,
+            limits={"knee_flexion": (flexion,)},
         )
 
         # -- phase 1: two-link swing (knee locked) -----------------------------------------------

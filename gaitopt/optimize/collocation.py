@@ -29,6 +29,15 @@ Linking (as in :mod:`gaitopt.shooting`): the first state is ``lift(s)`` on the s
 ends on its guard (crossing in the stated direction, admissibly); the reset of its end state,
 with the input at the end of the phase, is the next phase's first state; the last reset returns
 to ``s``.  The model's unilateral constraints (``Phase.constraints``) hold at every node.
+
+Joint limits: the problem's state bounds are bounds of the node variables (every interval start
+and Radau point; the section's lifted state, for the states ``lift`` computes, by rows), in each
+phase that has the state; its selected limits (``Phase.limits``, ``GaitProblem.path_constraints``:
+a knee that must not hyperextend) are rows ``c ≥ 0`` at the same nodes (not at a node where the
+limit is 0 by construction, ``at_start``/``at_end``).  A limit that is the side a guard without
+admissibility test keeps anyway (the kneed walker's knee flexion is its knee strike's guard) is
+already imposed and adds no rows.  :meth:`Collocation.check_limits` checks both on dense samples
+of the solution's polynomials; :meth:`Collocation.active_limits` says where they bind.
 """
 
 from __future__ import annotations
@@ -56,6 +65,13 @@ from .radau import (
 )
 
 __all__ = ["RadauMesh", "Collocation", "lagrange_matrix", "Group", "Arc"]
+
+#: Uniform samples per mesh interval of the dense check of state bounds and limits
+#: (:meth:`Collocation.check_limits`): not the nodes, where they are imposed.
+LIMIT_SAMPLES = 64
+#: A state bound or limit counts as violated on the dense samples where
+#: ``c < −LIMIT_TOL · (1 + max |c|)``: the rule of :func:`gaitopt.shooting.certify`.
+LIMIT_TOL = 1e-9
 
 
 def _implicit_dynamics(model: Any) -> ca.Function | None:
@@ -157,6 +173,8 @@ class Collocation:
                     )
         slack = work and structure is None
 
+        self.limit_groups: list[str] = []  # names of the rows of state bounds and limits
+        self.guard_limits: list[tuple[int, str]] = []  # (phase, limit) kept by a guard's rows
         X, U, T, Pp, Pm, Th = [], [], [], [], [], []
         for k, i in enumerate(self.chain):
             n = phases[i].n
@@ -270,6 +288,7 @@ class Collocation:
                         0.0,
                         np.inf,
                     )
+            self._add_limits(add, k, i, label, Xk, Uk, u_start, p)
             x_next = tr.reset(x_end, u_end, p)
             if k + 1 < len(self.chain):
                 add(f"reset after {label}", X[k + 1][:, 0] - x_next)
@@ -467,6 +486,163 @@ class Collocation:
             if (np.isfinite(ulo[r]) or np.isfinite(uhi[r])) and ulo[r] < uhi[r] and free_nodes:
                 name = f"|{self.model.inputs[r]}| between nodes ({label})"
                 add(name, us[r, free_nodes], ulo[r], uhi[r])
+
+    def _add_limits(
+        self, add: Any, k: int, i: int, label: str, Xk: Any, Uk: Any, u_start: Any, p: Any
+    ) -> None:
+        """Rows of phase ``k`` (model phase ``i``) for the selected limits and, at the section,
+        the bounds of the states ``lift`` computes (the other nodes' bounds are variable bounds)."""
+        problem, phase = self.problem, self.model.phases[i]
+        if k == 0:
+            lo, hi = problem.state_bounds_of(i)
+            rows = [
+                j
+                for j in range(phase.n)
+                if j not in self.section_index and (np.isfinite(lo[j]) or np.isfinite(hi[j]))
+            ]
+            for j in rows:
+                name = f"bound on '{phase.states[j]}' at the section"
+                add(name, Xk[j, 0], lo[j], hi[j])
+                self.limit_groups.append(name)
+        for c in problem.limits_of(i):
+            if self._kept_by_guard(i, c):
+                self.guard_limits.append((i, c.name))
+                continue
+            first = 1 if c.at_start else 0
+            last = Xk.shape[1] - 1 if c.at_end else Xk.shape[1]
+            nodes = Xk[:, first:last]
+            # The input at a node: the start's extrapolated value, then the Radau points'.
+            unodes = ca.horzcat(u_start, Uk)[:, first:last]
+            if nodes.shape[1]:
+                name = f"limit '{c.name}' ({label})"
+                add(name, c.function.map(nodes.shape[1])(nodes, unodes, p), 0.0, np.inf)
+                self.limit_groups.append(name)
+
+    def _kept_by_guard(self, i: int, c: Any) -> bool:
+        """Whether limit ``c`` of phase ``i`` is ``direction · g ≤ 0`` of its cycle transition's
+        guard without admissibility test, ``c = −direction · g`` (checked at random states),
+        which the transcription keeps at the interior nodes anyway (with the problem's
+        guard margin, never less)."""
+        tr = self.model.phases[i].transitions[0]
+        if tr.admissible is not None:
+            return False
+        rng = np.random.default_rng(0)
+        n, n_u = self.model.phases[i].n, len(self.model.inputs)
+        for _ in range(4):
+            x, u = rng.normal(size=n), rng.normal(size=n_u)
+            value = float(c.function(x, u, self.model.p))
+            guard = float(tr.guard(x, u, self.model.p))
+            if abs(value + tr.direction * guard) > 1e-12 * (1 + abs(value)):
+                return False
+        return True
+
+    # -- joint limits on the solution ---------------------------------------------------------
+    def _limit_values(
+        self, sol: dict[str, Any], k: int, X: np.ndarray, U: np.ndarray
+    ) -> list[tuple[str, np.ndarray, bool, bool]]:
+        """``(label, c, at_start, at_end)`` of every state bound side (``x − low``,
+        ``high − x``) and selected limit of phase ``k`` at the samples ``X``, ``U`` (``c ≥ 0``
+        wanted)."""
+        problem = self.problem
+        i = self.chain[k]
+        phase = self.model.phases[i]
+        out = []
+        lo, hi = problem.state_bounds_of(i)
+        for j, state in enumerate(phase.states):
+            if np.isfinite(lo[j]):
+                out.append((f"{state} >= {lo[j]:g}", X[j] - lo[j], False, False))
+            if np.isfinite(hi[j]):
+                out.append((f"{state} <= {hi[j]:g}", hi[j] - X[j], False, False))
+        for c in problem.limits_of(i):
+            values = np.asarray(c.function.map(X.shape[1])(X, U, sol["p"]), dtype=float).ravel()
+            out.append((f"{c.name} >= 0", values, c.at_start, c.at_end))
+        return out
+
+    def _phase_label(self, k: int) -> str:
+        """The phase's name (with its place in the orbit when the orbit has several phases)."""
+        phase = self.model.phases[self.chain[k]]
+        return phase.name if len(self.chain) == 1 else f"{phase.name} #{k + 1}"
+
+    def check_limits(self, sol: dict[str, Any], samples: int = LIMIT_SAMPLES) -> str | None:
+        """None if every state bound and selected limit holds on ``samples`` uniform samples per
+        mesh interval of each phase's polynomials, ``c ≥ −1e-9 · (1 + max |c|)`` (the rule of
+        :func:`gaitopt.shooting.certify`'s unilateral constraints); else the first failure."""
+        tn = np.linspace(0.0, 1.0, self.N * samples + 1)
+        t0 = 0.0
+        for k in range(len(self.chain)):
+            X, U = self.evaluate(sol["X"][k], sol["U"][k], tn, sol["breaks"][k])
+            for label, c, at_start, at_end in self._limit_values(sol, k, X, U):
+                inner = c[1 if at_start else 0 : c.size - 1 if at_end else c.size]
+                scale = LIMIT_TOL * (1 + float(np.max(np.abs(c))))
+                bad = np.nonzero(inner < -scale)[0]
+                if bad.size:
+                    j = int(bad[0]) + (1 if at_start else 0)
+                    return (
+                        f"the limit '{label}' fails between the nodes of phase "
+                        f"'{self._phase_label(k)}' at t = {t0 + tn[j] * sol['T'][k]:.4g} s (by "
+                        f"{-float(np.min(inner)):.3g}; dense samples, tolerance {scale:.2g})"
+                    )
+            t0 += sol["T"][k]
+        return None
+
+    def active_limits(self, sol: dict[str, Any]) -> dict[str, list[list[float]]]:
+        """The state bounds and selected limits active at the nodes (within 1e-6 of their bound,
+        relative to 1 + the largest |c|): ``{"LABEL (phase)": [[t_first, t_last], ...]}``, the
+        times (s since the orbit's section) of each run of consecutive active nodes."""
+        out: dict[str, list[list[float]]] = {}
+        t0 = 0.0
+        for k in range(len(self.chain)):
+            X, U = sol["X"][k], sol["U"][k]
+            times = t0 + self.node_times(sol["breaks"][k]) * sol["T"][k]
+            U = np.hstack([self.u_start_of(U), U])
+            for label, c, at_start, at_end in self._limit_values(sol, k, X, U):
+                hit = np.abs(c) <= 1e-6 * (1 + float(np.max(np.abs(c))))
+                if at_start:
+                    hit[0] = False
+                if at_end:
+                    hit[-1] = False
+                if not hit.any():
+                    continue
+                spans, j = [], 0
+                while j < hit.size:
+                    if hit[j]:
+                        e = j
+                        while e + 1 < hit.size and hit[e + 1]:
+                            e += 1
+                        spans.append([float(times[j]), float(times[e])])
+                        j = e + 1
+                    else:
+                        j += 1
+                out.setdefault(f"{label} ({self._phase_label(k)})", []).extend(spans)
+            t0 += sol["T"][k]
+        return out
+
+    def certify_limits(self, w: np.ndarray, result: Any) -> None:
+        """The certificate's part for the state bounds and selected limits of an optimum
+        ``result`` (an :class:`~gaitopt.optimize.result.OptimalGait` from ``w``): its
+        ``active_constraints`` name each active bound or limit with its phase (``active_spans``:
+        the time spans), and a gait whose dense samples violate one (:meth:`check_limits`) is
+        no gait (``success`` False, the message says which, where and by how much)."""
+        problem = self.problem
+        if not problem.state_bounds and not problem.path_constraints:
+            return
+        sol = self.unpack(w, self.model.p)
+        spans = self.active_limits(sol)
+        generic = {f"{lo:g} <= {n} <= {hi:g}" for n, (lo, hi) in problem.state_bounds.items()}
+        drop = generic | set(self.limit_groups)
+        kept = [a for a in result.active_constraints if a not in drop]
+        result.active_constraints = kept + list(spans)
+        result.active_spans = spans
+        if result.cost is None or result.message.startswith("not a gait"):
+            return
+        failure = self.check_limits(sol)
+        if failure is not None:
+            result.success, result.stable = False, None
+            result.message = "not a gait: " + failure
+
+    def u_start_of(self, U: np.ndarray) -> np.ndarray:
+        """The input polynomial of the first interval at its start (a column)."""
+        return U[:, : self.d] @ self.u_at_start.reshape(-1, 1)
 
     def _idle_inputs(self, phase: int) -> list[int]:
         """Inputs whose rate (:meth:`~gaitopt.HybridModel.input_rates`) is identically zero in

@@ -122,7 +122,17 @@ class GaitProblem:
         high`` (input units) at every collocation point, within the model's own
         :attr:`~gaitopt.HybridModel.input_bounds`; 0 switches the input off.
     state_bounds : mapping of str to (float, float)
-        ``{state: (low, high)}`` at every node (joint limits, rate limits; state units).
+        ``{state: (low, high)}``, ``low < high`` (one side may be infinite; state units: joint
+        limits, rate limits), in every phase that has a state of that name (the kneed walker's
+        ``q3`` only before its knee locks), at every node of the collocation (interval starts
+        and Radau points, the section's lifted state too).  Input bounds stay in ``bounds``: a
+        state named there is an error pointing here.
+    path_constraints : tuple of str
+        Names of limits the model declares (:attr:`gaitopt.hybrid.Phase.limits`: the five-link
+        biped's and the kneed walker's ``"knee_flexion"``, a knee that does not hyperextend),
+        imposed at every collocation node of each phase that declares them.  Off unless named
+        (the model's gait without them is the reference: OptimTraj's logged five-link optimum has
+        no knee limit).
     free : tuple of str
         Parameters made decision variables, within their declared ranges.
     steps : int
@@ -168,6 +178,7 @@ class GaitProblem:
     speed: float | None = None
     bounds: Mapping[str, float] = field(default_factory=dict)
     state_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    path_constraints: tuple[str, ...] = ()
     free: tuple[str, ...] = ()
     steps: int = 1
     max_phase_time: float = 10.0
@@ -247,25 +258,55 @@ class GaitProblem:
             raise GaitoptInputError(
                 f"`continuous_inputs` must be True or False, got {self.continuous_inputs!r}"
             )
+        states = all_state_names(model)
         for name, value in dict(self.bounds).items():
+            if name not in model.inputs and name in states:
+                raise GaitoptInputError(
+                    f"`bounds` names {name!r}, a state of {model.name}, not an input; bound "
+                    f"states with state_bounds, e.g. state_bounds={{{name!r}: (-1.0, 1.0)}}"
+                )
             if name not in model.inputs:
                 raise GaitoptInputError(
                     f"`bounds` names unknown input {name!r}; {did_you_mean(name, model.inputs)}"
                     f"{model.name}'s inputs: {', '.join(model.inputs)}"
                 )
             _bound_pair(name, value)
-        states = model.state_names
+        if not isinstance(self.state_bounds, Mapping):
+            raise GaitoptInputError(
+                f"`state_bounds` must be a mapping {{state: (low, high)}}, got "
+                f"{self.state_bounds!r:.80}; e.g. state_bounds={{{states[0]!r}: (-1.0, 1.0)}}"
+            )
+        checked = {}
         for name, pair in dict(self.state_bounds).items():
             if name not in states:
-                raise GaitoptInputError(
-                    f"`state_bounds` names unknown state {name!r}; {did_you_mean(name, states)}"
-                    f"the states are {', '.join(states)}"
+                also = (
+                    f"; {name!r} is an input: bound it with bounds" if name in model.inputs else ""
                 )
-            low, high = (float(v) for v in pair)
-            if not low < high:
                 raise GaitoptInputError(
-                    f"`state_bounds[{name!r}]` must be (low, high) with low < high, got {pair!r}"
+                    f"`state_bounds` names unknown state {name!r}{also}; "
+                    f"{did_you_mean(name, states)}{model.name}'s states: {', '.join(states)}"
                 )
+            checked[name] = _state_pair(name, pair)
+        object.__setattr__(self, "state_bounds", checked)
+        paths = self.path_constraints
+        paths = (paths,) if isinstance(paths, str) else tuple(paths)
+        declared = declared_limits(model)
+        for name in paths:
+            if name not in declared:
+                have = (
+                    f"{model.name}'s limits: {', '.join(declared)}"
+                    if declared
+                    else f"{model.name} declares none (Phase.limits)"
+                )
+                raise GaitoptInputError(
+                    f"`path_constraints` names unknown limit {name!r}; "
+                    f"{did_you_mean(name, declared) if declared else ''}{have}"
+                )
+        if len(set(paths)) != len(paths):
+            raise GaitoptInputError(
+                f"`path_constraints` names a limit twice: {', '.join(paths)}; name each once"
+            )
+        object.__setattr__(self, "path_constraints", paths)
         params = model.params
         free = tuple(self.free)
         for name in free:
@@ -388,6 +429,12 @@ class GaitProblem:
         value = ca.sum1(work(x, u, p))
         return value if isinstance(x, (ca.MX, ca.SX)) else float(value)
 
+    def limits_of(self, phase: int) -> list[Any]:
+        """The selected limits (:attr:`path_constraints`) ``phase`` declares, as
+        :class:`~gaitopt.hybrid.Constraint` objects (``c ≥ 0``), in the order named."""
+        declared = self.model.phases[phase].limits
+        return [c for name in self.path_constraints for c in declared.get(name, ())]
+
     def state_bounds_of(self, phase: int) -> tuple[np.ndarray, np.ndarray]:
         """``(low, high)`` of the states of ``phase`` (by name; ``±inf`` where unbounded)."""
         names = self.model.phases[phase].states
@@ -468,6 +515,7 @@ class GaitProblem:
                 for k, v in dict(self.bounds).items()
             },
             "state_bounds": {k: list(v) for k, v in dict(self.state_bounds).items()},
+            **({"path_constraints": list(self.path_constraints)} if self.path_constraints else {}),
             "free": list(self.free),
             "steps": self.steps,
             **({"clearance": self.clearance} if self.clearance else {}),
@@ -476,13 +524,51 @@ class GaitProblem:
         }
 
 
+def all_state_names(model: HybridModel) -> tuple[str, ...]:
+    """Every phase's state names, once each, in order of first appearance."""
+    return tuple(dict.fromkeys(n for phase in model.phases for n in phase.states))
+
+
+def declared_limits(model: HybridModel) -> tuple[str, ...]:
+    """Names of the limits the model's phases declare (:attr:`gaitopt.hybrid.Phase.limits`)."""
+    return tuple(dict.fromkeys(n for phase in model.phases for n in phase.limits))
+
+
+def _state_pair(name: str, pair: Any) -> tuple[float, float]:
+    """``state_bounds[name]`` as ``(low, high)``: two numbers, ``low < high``, not both infinite."""
+    try:
+        low, high = (float(v) for v in pair)
+    except (TypeError, ValueError):
+        low = high = math.nan
+    if math.isnan(low) or math.isnan(high) or not low < high or low == math.inf or (
+        high == -math.inf
+    ):
+        raise GaitoptInputError(
+            f"`state_bounds[{name!r}]` must be a pair (low, high) of numbers with low < high "
+            f"(one side may be infinite), got {pair!r}; e.g. state_bounds={{{name!r}: (-1.0, 1.0)}}"
+        )
+    if math.isinf(low) and math.isinf(high):
+        raise GaitoptInputError(
+            f"`state_bounds[{name!r}]` = {pair!r} bounds nothing; give a finite side, e.g. "
+            f"state_bounds={{{name!r}: (0.0, math.inf)}}, or leave {name!r} out"
+        )
+    return low, high
+
+
 def as_problem(model: HybridModel, **kwargs: Any) -> GaitProblem:
     """A :class:`GaitProblem` from keyword arguments (the public API's names)."""
     bounds = kwargs.pop("bounds", None) or {}
     state_bounds = kwargs.pop("state_bounds", None) or {}
+    paths = kwargs.pop("path_constraints", None) or ()
+    kwargs["path_constraints"] = (paths,) if isinstance(paths, str) else tuple(paths)
     free = kwargs.pop("free", None) or ()
     if isinstance(free, str):
         free = (free,)
+    if not isinstance(state_bounds, Mapping):
+        raise GaitoptInputError(
+            f"`state_bounds` must be a mapping {{state: (low, high)}}, got {state_bounds!r:.80}; "
+            f"e.g. state_bounds={{{model.state_names[0]!r}: (-1.0, 1.0)}}"
+        )
     return GaitProblem(
         model, bounds=dict(bounds), state_bounds=dict(state_bounds), free=tuple(free), **kwargs
     )

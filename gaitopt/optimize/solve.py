@@ -90,6 +90,7 @@ def optimize_gait(
     speed: float | None = None,
     bounds: dict[str, float] | None = None,
     state_bounds: dict[str, tuple[float, float]] | None = None,
+    path_constraints: tuple[str, ...] | str = (),
     free: tuple[str, ...] | str = (),
     steps: int = 1,
     starts: int | Sequence[int] = 1,
@@ -112,9 +113,15 @@ def optimize_gait(
     period, step_length, speed : float, optional
         Fixed orbit period (s), mean step length (m), average speed (m/s); free when omitted.
     bounds : dict, optional
-        ``{input: max}``: ``|u| ≤ max`` (input units).
+        ``{input: max}``: ``|u| ≤ max``, or ``{input: (low, high)}`` (input units).
     state_bounds : dict, optional
-        ``{state: (low, high)}`` at every node (joint and rate limits).
+        ``{state: (low, high)}``, ``low < high`` (one side may be infinite): joint and rate
+        limits, at every collocation node of every phase with that state, checked on dense
+        samples of the optimum (``c ≥ −1e-9 (1 + max|c|)``); a state in ``bounds`` is an error.
+    path_constraints : tuple of str, optional
+        Limits the model declares (``Phase.limits``), imposed at every collocation node and
+        checked on dense samples like ``state_bounds``: ``("knee_flexion",)`` keeps the
+        five-link biped's or the kneed walker's knees from hyperextending.  Default: none.
     free : tuple of str
         Parameters to optimise too, within their declared ranges.
     steps : int
@@ -170,6 +177,7 @@ def optimize_gait(
         speed=speed,
         bounds=bounds,
         state_bounds=state_bounds,
+        path_constraints=path_constraints,
         free=free,
         steps=steps,
     )
@@ -589,6 +597,7 @@ def _finish(
             break
     disc_error = max(cost_error, orbit_error)
     result = _certify(problem, col, w, stats, verify=verify)
+    col.certify_limits(w, result)  # state bounds and path constraints: dense check, where active
     # The final transcription and its solution (the stabilising design differentiates it).
     result.transcription = (col, w)  # type: ignore[attr-defined]
     result.discretisation_error = disc_error if np.isfinite(disc_error) else None
