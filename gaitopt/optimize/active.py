@@ -1,7 +1,7 @@
 """Which constraints of an optimal gait are active, and which one a failed solve cannot meet
 (the ``active_constraints`` of a result; the message of an infeasible problem).  An input bound
 of a least-effort optimum solved with the arcs of its bounds (:func:`gaitopt.optimize.arcs.
-detect_bound_arcs`) is listed with its saturated arcs: ``"hip_torque = -4 on [0, 0.408] s"``."""
+detect_bound_arcs`) is listed with its arcs: ``"arcs of the input bounds [lo free lo]"``."""
 
 from __future__ import annotations
 

@@ -311,8 +311,20 @@ def describe_bounds(structure: list[list[Arc]], inputs: tuple[str, ...] | list[s
 
 
 def bound_arcs_of(col: Collocation, w: np.ndarray, p: np.ndarray) -> list[str]:
-    """The saturated arcs of a solved transcription with arcs of input bounds, for the active
-    set: ``"hip_torque = 4 on [0.1234, 0.2345] s"`` (time since the section), one per arc and
+    """The arcs of a solved transcription with arcs of input bounds, for the active set:
+    ``["arcs of the input bounds [lo free lo]"]`` (:func:`describe_bounds`; no times, so that
+    the points of a library with the same arcs have the same active set, and a new saturated
+    arc is a change of it); empty without such a structure.  ``p`` is unused (the signature
+    of the other active-set readers)."""
+    del w, p
+    if col.structure is None or col.problem.cost_kind in ("work", "cot"):
+        return []
+    return [f"arcs of the input bounds {describe_bounds(col.structure, col.model.inputs)}"]
+
+
+def saturated_spans(col: Collocation, w: np.ndarray, p: np.ndarray) -> list[str]:
+    """The saturated arcs of a solved transcription with arcs of input bounds, with their
+    times: ``"hip_torque = -4 on [0, 0.407938] s"`` (time since the section), one per arc and
     input at a bound; empty without such a structure."""
     if col.structure is None or col.problem.cost_kind in ("work", "cot"):
         return []
