@@ -400,6 +400,12 @@ def solve_problem(
         )
     _check_counts(steps=problem.steps, starts=starts, seed=seed, mesh=mesh, tol=tol,
                   verify=verify)  # fmt: skip
+    if scheduler is not None and problem.path_constraints:  # workers rebuild without them
+        raise GaitoptInputError(
+            f"`scheduler` does not carry `path_constraints` "
+            f"({', '.join(problem.path_constraints)}) to its workers yet; run the starts "
+            f"serially (scheduler=None)"
+        )
     check_warm_start(problem, guess)
     model = problem.model
     p = model.p
