@@ -329,6 +329,15 @@ class HybridModel:
     #: the work :meth:`impulse_work` says it does to the work-based costs.  Empty (default):
     #: none; every input acts in the flow.
     impulsive_inputs: ClassVar[tuple[str, ...]] = ()
+    #: Phase 0's states, the section's free coordinates and the section's definition exactly as
+    #: :meth:`build` makes them, declared so that ``gaitopt list`` shows them without building
+    #: the model (the Strandbeest's linkage takes seconds): :meth:`declared_structure`.  The
+    #: build checks them (a mismatch is a :class:`~gaitopt.errors.ModelDefinitionError`).  A
+    #: class declares its own (a subclass does not inherit them); undeclared, ``gaitopt list``
+    #: builds the model to learn them.
+    declared_states: ClassVar[tuple[str, ...]] = ()
+    declared_coordinates: ClassVar[tuple[str, ...]] = ()
+    declared_section_doc: ClassVar[str] = ""
     _cache: ClassVar[dict[type, _Structure]] = {}
     _specs: ClassVar[dict[type, tuple[ParameterSpec, ...]]] = {}
 
@@ -428,11 +437,21 @@ class HybridModel:
         return specs
 
     @classmethod
+    def declared_structure(cls) -> tuple[tuple[str, ...], tuple[str, ...], str] | None:
+        """``(states, coordinates, section definition)`` as the class itself declares them
+        (:attr:`declared_states`, :attr:`declared_coordinates`, :attr:`declared_section_doc`),
+        without building the model; None if the class declares none of its own."""
+        if "declared_states" not in vars(cls):
+            return None
+        return cls.declared_states, cls.declared_coordinates, cls.declared_section_doc
+
+    @classmethod
     def _structure(cls) -> _Structure:
         if cls not in HybridModel._cache:
             sym = Symbols(cls.parameter_specs(), cls.inputs)
             phases, section = cls.build(sym)
             _validate_structure(cls, tuple(phases), section)
+            _check_declared(cls, tuple(phases), section)
             HybridModel._cache[cls] = _Structure(tuple(phases), section)
         return HybridModel._cache[cls]
 
@@ -547,6 +566,26 @@ def _frozen_setattr(self: HybridModel, name: str, value: Any) -> None:
     raise FrozenModelError(
         f"cannot assign to {cls.__name__}.{name}: models are immutable; change a parameter with "
         f"model.replace(NAME=VALUE)"
+    )
+
+
+def _check_declared(cls: type, phases: tuple[Phase, ...], section: Section) -> None:
+    """The structure a class declares (:meth:`HybridModel.declared_structure`) is the one its
+    ``build`` made: phase 0's states, the section's coordinates and definition."""
+    from .errors import ModelDefinitionError
+
+    declared = cls.declared_structure()
+    built = (tuple(phases[0].states), tuple(section.coordinates), section.doc)
+    if declared is None or tuple(declared) == built:
+        return
+    what = ("declared_states", "declared_coordinates", "declared_section_doc")
+    wrong = [
+        f"{name} = {d!r} (built: {b!r})"
+        for name, d, b in zip(what, declared, built, strict=True)
+        if d != b
+    ]
+    raise ModelDefinitionError(
+        f"model class {cls.__name__}: its declaration differs from its build: {'; '.join(wrong)}"
     )
 
 

@@ -269,3 +269,85 @@ def test_labels_doctests():
     for module in (gaitopt.plotting.labels, gaitopt.plotting.optimal):
         result = doctest.testmod(module)
         assert result.attempted >= 1 and result.failed == 0
+
+
+# -- gaitopt list -------------------------------------------------------------------------------
+def test_list_builds_no_model(capsys, monkeypatch):
+    from gaitopt.hybrid import HybridModel
+    from gaitopt.models import REGISTRY
+
+    built = []
+
+    def no_build(cls, *args):
+        built.append(cls.__name__)
+        raise AssertionError(f"gaitopt list built {cls.__name__}")
+
+    # _structure is where every build (cached or not) is reached: phases, section, state_names.
+    monkeypatch.setattr(HybridModel, "_structure", classmethod(no_build))
+    for cls in REGISTRY.values():
+        monkeypatch.setattr(cls, "build", classmethod(no_build))
+    for argv in (["list"], ["list", "--json"]):
+        status, out, err = run(capsys, *argv)
+        assert status == 0 and err == "" and out
+    assert built == []
+
+
+def test_list_json_and_text_give_each_parameters_source(capsys):
+    from gaitopt.models import REGISTRY
+
+    status, out, _ = run(capsys, "list", "--json")
+    assert status == 0
+    entries = {entry["name"]: entry for entry in json_loads(out)}
+    assert set(entries) == set(REGISTRY)
+    for name, cls in REGISTRY.items():
+        sources = {p["name"]: p["source"] for p in entries[name]["params"]}
+        assert sources == {spec.name: spec.source for spec in cls.parameter_specs()}
+        assert all(sources.values()), name  # every default says where it comes from
+    compass = entries["compass_gait"]
+    assert compass["input_units"] == ["N*m"]
+    status, text, _ = run(capsys, "list")
+    for entry in entries.values():
+        for p in entry["params"]:
+            assert f"source: {p['source']}\n" in text
+    assert "hip_torque (N*m)" in text
+
+
+def test_list_declarations_are_the_built_structure(capsys):
+    from gaitopt.cli.list_ import describe_model
+    from gaitopt.models import REGISTRY
+
+    for cls in REGISTRY.values():
+        entry, model = describe_model(cls), cls()
+        assert cls.declared_structure() is not None, cls.name
+        assert entry["state_names"] == list(model.state_names)  # builds (and checks) the model
+        assert entry["section_coordinates"] == list(model.section.coordinates)
+        assert entry["section"] == model.section.doc
+
+
+def test_a_declaration_that_differs_from_the_build_is_refused():
+    from dataclasses import dataclass
+
+    from gaitopt.errors import ModelDefinitionError
+    from gaitopt.models.vanderpol import VanDerPol
+
+    @dataclass(frozen=True)
+    class Misdeclared(VanDerPol):
+        declared_states = ("x", "x_dot")
+        declared_coordinates = ("x_dot",)
+        declared_section_doc = "q = 0, q_dot > 0"
+
+    with pytest.raises(ModelDefinitionError, match=r"declared_states = \('x', 'x_dot'\)"):
+        _ = Misdeclared().state_names
+
+    @dataclass(frozen=True)
+    class Undeclared(VanDerPol):  # a subclass does not inherit its parent's declaration
+        pass
+
+    assert Undeclared.declared_structure() is None
+    assert Undeclared().state_names == ("q", "q_dot")
+
+
+def json_loads(text: str):
+    import json
+
+    return json.loads(text)

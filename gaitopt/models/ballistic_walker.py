@@ -98,6 +98,13 @@ class BallisticWalker(HybridModel):
     """Mochon & McMahon's ballistic swing: states ``stance, thigh, shank`` (rad) and their rates."""
 
     name = "ballistic_walker"
+    #: For ``gaitopt list`` without a build (checked against it).
+    declared_states = ("stance", "thigh", "shank", "stance_dot", "thigh_dot", "shank_dot")
+    declared_coordinates = ("stance_dot", "thigh_dot", "shank_dot")
+    declared_section_doc = (
+        "toe-off: stance = −asin(step_length / 2 l), knee flexed by toe_off_knee with the toe on "
+        "the ground behind; rates free"
+    )
     title = "Ballistic walker (swing phase)"
     reference = "Mochon & McMahon 1980, J. Biomech. 13:49–57"
     state_units = {

@@ -66,6 +66,10 @@ class BouncingBall(HybridModel):
     (m/s); section just after an impact (``phase``, ``y_dot``)."""
 
     name = "bouncing_ball"
+    #: For ``gaitopt list`` without a build (checked against it).
+    declared_states = ("phase", "y", "y_dot")
+    declared_coordinates = ("phase", "y_dot")
+    declared_section_doc = "just after an impact: y = A sin(phase), phase in [−π, π)"
     state_units = {"phase": "rad", "y": "m", "y_dot": "m/s"}  # for axis labels
     title = "Ball bouncing on a vibrating table"
     reference = "Holmes 1982; Guckenheimer & Holmes 1983, §2.4"

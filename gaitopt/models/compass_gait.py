@@ -52,6 +52,10 @@ class CompassGait(HybridModel):
     (rad/s); per-step input ``hip_torque`` (N·m, constant over a step)."""
 
     name = "compass_gait"
+    #: For ``gaitopt list`` without a build (checked against it).
+    declared_states = ("stance", "swing", "stance_dot", "swing_dot")
+    declared_coordinates = ("stance", "stance_dot", "swing_dot")
+    declared_section_doc = "just after heel strike: swing = 2·slope − stance"
     state_units = {
         "stance": "rad",
         "swing": "rad",

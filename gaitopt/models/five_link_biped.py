@@ -226,6 +226,14 @@ class FiveLinkBiped(HybridModel):
     """
 
     name = "five_link_biped"
+    #: For ``gaitopt list`` without a build (checked against it).
+    declared_states = STATE_NAMES
+    declared_coordinates = tuple(n for n in STATE_NAMES if n != "swing_shank")
+    declared_section_doc = (
+        "just after heel strike: the swing foot on the ground behind the stance foot, swing_shank "
+        "= −slope − arccos((l_s cos(stance_shank + slope) + l_t cos(stance_thigh + slope) − l_t "
+        "cos(swing_thigh + slope)) / l_s)"
+    )
     title = "Five-link biped"
     reference = "Kelly 2017 (SIAM Review 59(4)); OptimTraj demo/fiveLinkBiped"
     inputs = ("stance_knee_torque", "stance_hip_torque", "swing_hip_torque", "swing_knee_torque")

@@ -212,6 +212,10 @@ class KneedWalker(HybridModel):
     phase 1 (knee locked) ``q1, q2, q1_dot, q2_dot``."""
 
     name = "kneed_walker"
+    #: For ``gaitopt list`` without a build (checked against it).
+    declared_states = ("q1", "q2", "q3", "q1_dot", "q2_dot", "q3_dot")
+    declared_coordinates = ("q1", "q1_dot", "q2_dot")
+    declared_section_doc = "just after heel strike: q2 = q3 = 2·slope − q1, q3_dot = q2_dot"
     state_units = {
         "q1": "rad",
         "q2": "rad",

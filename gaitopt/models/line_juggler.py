@@ -64,6 +64,12 @@ class LineJuggler(HybridModel):
     pre-impact velocity, held); section just before impact, coordinate ``b_dot``."""
 
     name = "line_juggler"
+    #: For ``gaitopt list`` without a build (checked against it).
+    declared_states = ("b", "v", "b_dot")
+    declared_coordinates = ("b_dot",)
+    declared_section_doc = (
+        "just before an impact: b_dot = pre-impact velocity; b = 0, v = the post-impact velocity"
+    )
     rates = {"b": "v"}  # b_dot is the held pre-impact velocity, not the rate of b
     state_units = {"b": "m", "v": "m/s", "b_dot": "m/s"}  # for axis labels
     title = "Line juggler (mirror law)"

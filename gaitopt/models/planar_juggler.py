@@ -98,6 +98,13 @@ class PlanarJuggler(HybridModel):
     ``x, x_dot_pre, energy_pre``."""
 
     name = "planar_juggler"
+    #: For ``gaitopt list`` without a build (checked against it).
+    declared_states = ("x", "y", "x_dot", "y_dot", "x_dot_pre", "energy_pre")
+    declared_coordinates = ("x", "x_dot_pre", "energy_pre")
+    declared_section_doc = (
+        "just before an impact: x = impact position, x_dot_pre, energy_pre = pre-impact horizontal"
+        " velocity and energy; y on the paddle, velocities after the impact"
+    )
     state_units = {
         "x": "m",
         "y": "m",

@@ -106,6 +106,10 @@ class RaibertHopper(HybridModel):
     (Raibert's controller is inside the dynamics)."""
 
     name = "raibert_hopper"
+    #: For ``gaitopt list`` without a build (checked against it).
+    declared_states = ("x", "z", "phi", "x_dot", "z_dot", "phi_dot")
+    declared_coordinates = ("z", "phi", "x_dot", "phi_dot")
+    declared_section_doc = "apex: z_dot = 0, x = 0"
     drawing = (("hip", "foot"), ("tail", "nose"))  # leg and body; other points are helpers
     state_units = {
         "x": "m",

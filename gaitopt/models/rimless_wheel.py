@@ -46,6 +46,13 @@ class RimlessWheel(HybridModel):
     """Rimless wheel: state ``theta`` (rad, from vertical, + downhill), ``theta_dot`` (rad/s)."""
 
     name = "rimless_wheel"
+    #: For ``gaitopt list`` without a build (checked against it).
+    declared_states = ("theta", "theta_dot")
+    declared_coordinates = ("theta_dot",)
+    declared_section_doc = (
+        "just after any impact: theta = slope − π/spokes if theta_dot ≥ 0 (forward), slope + "
+        "π/spokes if theta_dot < 0 (backward)"
+    )
     title = "Rimless wheel"
     reference = "McGeer 1990; Coleman, Chatterjee & Ruina 1997; Tedrake, Underactuated Robotics"
     state_units = {"theta": "rad", "theta_dot": "rad/s"}

@@ -61,6 +61,10 @@ class SimplestWalker(HybridModel):
     (rad per unit of dimensionless time τ = t·sqrt(g/l)); g = l = 1."""
 
     name = "simplest_walker"
+    #: For ``gaitopt list`` without a build (checked against it).
+    declared_states = ("theta", "phi", "theta_dot", "phi_dot")
+    declared_coordinates = ("theta", "theta_dot")
+    declared_section_doc = "just after heel strike: phi = 2·theta, phi_dot = (1 − cos 2θ)·theta_dot"
     state_units = {
         "theta": "rad",
         "phi": "rad",

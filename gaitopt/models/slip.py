@@ -257,6 +257,10 @@ class Slip(HybridModel):
     (rad), ``r_dot``, ``theta_dot``; per-step input ``touchdown_angle`` (rad from vertical)."""
 
     name = "slip"
+    #: For ``gaitopt list`` without a build (checked against it).
+    declared_states = ("x", "z", "x_dot", "z_dot")
+    declared_coordinates = ("z",)
+    declared_section_doc = "apex: z_dot = 0, x = 0, x_dot = sqrt(2 (energy/mass − gravity·z))"
     drawing = (("hip", "foot"),)  # leg and body; other points are helpers
     state_units = {
         "x": "m",

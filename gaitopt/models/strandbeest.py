@@ -336,6 +336,10 @@ class Strandbeest(HybridModel):
     """Six-pair Strandbeest walker: state ``theta`` (crank angle, rad), ``theta_dot`` (rad/s)."""
 
     name = "strandbeest"
+    #: For ``gaitopt list`` without a build (checked against it).
+    declared_states = ("theta", "theta_dot")
+    declared_coordinates = ("theta_dot",)
+    declared_section_doc = "just after the handover to foot 10: theta = 0 rad"
     title = "Strandbeest (Jansen's linkage, six pairs)"
     reference = "Jansen 2007; Deits, Drake examples/multibody/strandbeest; Tedrake, rimless wheel"
     mesh = (3, 4)

@@ -25,6 +25,10 @@ class VanDerPol(HybridModel):
     """Van der Pol oscillator ``q̈ = μ (1 − q²) q̇ − q`` (dimensionless time)."""
 
     name = "vanderpol"
+    #: For ``gaitopt list`` without a build (checked against it).
+    declared_states = ("q", "q_dot")
+    declared_coordinates = ("q_dot",)
+    declared_section_doc = "q = 0, q_dot > 0"
     state_units = {"q": "1", "q_dot": "1"}  # for axis labels
     time_unit = "1"
     title = "Van der Pol oscillator"

@@ -93,6 +93,10 @@ class VerticalHopper(HybridModel):
     ``dissipated``; per-step input ``thrust_offset`` (m, added to the controller's thrust)."""
 
     name = "vertical_hopper"
+    #: For ``gaitopt list`` without a build (checked against it).
+    declared_states = ("y", "y_dot")
+    declared_coordinates = ("y",)
+    declared_section_doc = "apex: y_dot = 0"
     state_units = {
         "y": "m",
         "y_dot": "m/s",
