@@ -25,6 +25,13 @@ positive work of the profile (the compass gait's: to 3e-11 of its simulation).  
 switching times are where the optimum puts them (Betts 2010, "Practical Methods for Optimal
 Control", §4.7, phases at the switches of bang-bang and singular arcs).
 
+Active input bounds of a cost without powers (least effort) use the same arcs, with only their
+``bounds`` read (:meth:`Collocation._bound_arcs`, found by
+:func:`gaitopt.optimize.arcs.detect_bound_arcs`): the input fixed at its bound on a saturated
+arc, collocated on a free one (its bound kept at the midpoints between the nodes too), so the
+kink where it meets the bound is an arc boundary and the refinement keeps the collocation's
+order (the compass gait at |τ| ≤ 4 N·m: 6.6e-11, where a uniform mesh stalls at 2.5e-6).
+
 Linking (as in :mod:`gaitopt.shooting`): the first state is ``lift(s)`` on the section; each phase
 ends on its guard (crossing in the stated direction, admissibly); the reset of its end state,
 with the input at the end of the phase, is the next phase's first state; the last reset returns
