@@ -18,6 +18,12 @@ from the model's default start and write, under ``OUT/<model>/``,
 * ``return_map.png`` — for 1-D sections, the staircase plot of the return map (the rimless
   wheel's closed-form map overlaid).
 
+``cycle.json`` is stored to the digits the gait is certified to (:func:`certified_record`), so
+that a rebuild elsewhere leaves the tracked files unchanged.  A GIF takes most of the run's time;
+``animation.key`` beside it records what it was drawn from (the stored gait, the sources of the
+model, the simulator and the drawing code, the matplotlib and Pillow versions), and a run whose
+key matches keeps the GIF instead of drawing it again.
+
 When the search fails only ``cycle.json`` is written (and figures of an earlier run removed).
 An actuated-only model (``passive_gait`` False: the five-link biped) has no passive gait to
 search for; it is skipped, with the reason, and does not count as a failure.
@@ -37,7 +43,11 @@ solve or a figure failed (the error is printed; the other models go on), 2 for b
 from __future__ import annotations
 
 import argparse
+import hashlib
+import json
 import math
+import re
+import shutil
 import sys
 import time
 import traceback
@@ -61,8 +71,86 @@ __all__ = ["main", "run_model", "return_map_interval"]
 WALK_STEPS = 4  # simulated steps in walking.gif
 TRANSIENT_STEPS = 8  # simulated steps overlaid on the phase portrait
 FIGURES = ("phase_portrait.png", "return_map.png", "walking.gif", "animation.gif")
+#: The key of the animation last drawn in a folder (see :func:`_animation_key`).
+ANIMATION_KEY = "animation.key"
 #: The entries of ``OUT/<model>/`` this runner owns: a run replaces them (the others stay).
-OWNED = ("cycle.json", *FIGURES)
+OWNED = ("cycle.json", *FIGURES, ANIMATION_KEY)
+
+#: Diagnostic fields stored as the power of ten above them (bounds, not run-to-run noise).
+_DIAGNOSTICS = ("residual", "discretisation_error", "verification_error")
+#: A diagnostic number in a message (``residual 3.9e-13``).
+_SMALL_NUMBER = re.compile(r"(?<![\w.])(\d(?:\.\d+)?e-\d+)")
+
+
+def _up_to_power_of_ten(value: float) -> float:
+    """The power of ten at or above ``value`` > 0 (``3.9e-13`` → ``1e-12``)."""
+    return float(f"1e{math.ceil(math.log10(value) - 1e-12)}")
+
+
+def certified_record(record: dict) -> dict:
+    """``cycle.json`` as stored by ``make gaits``: the numbers to the digits the gait is
+    certified to, so that a rebuild on another machine (another BLAS, another compiler) writes
+    the same file.
+
+    The fixed point, period, durations and section coordinates are rounded at one digit below
+    the certificate's accuracy ``e = max(discretisation error, residual)`` (e = 9e-12: to 1e-11);
+    the multipliers, derivatives of the orbit, two digits coarser; the diagnostics themselves
+    (residual, discretisation and verification errors, in the fields and in the message) are
+    stored as the power of ten above them (``residual 3.9e-13`` → ``residual < 1e-12``).  A
+    failed search is stored as it is.
+    """
+    if not record.get("success"):
+        return record
+    errors = [record.get(k) for k in ("discretisation_error", "residual")]
+    accuracy = max([e for e in errors if isinstance(e, float) and math.isfinite(e)] + [1e-14])
+    decimals = max(0, -math.floor(math.log10(accuracy)) - 1)
+
+    def rounded(value, places):
+        if isinstance(value, float) and math.isfinite(value):
+            return round(value, places) + 0.0  # + 0.0: no "-0.0"
+        if isinstance(value, dict):
+            return {k: rounded(v, places) for k, v in value.items()}
+        if isinstance(value, list):
+            return [rounded(v, places) for v in value]
+        return value
+
+    out = dict(record)
+    for key in ("period", "fixed_point", "durations", "inputs"):
+        if key in out:
+            out[key] = rounded(out[key], decimals)
+    if "multipliers" in out:
+        out["multipliers"] = rounded(out["multipliers"], max(0, decimals - 2))
+    for key in _DIAGNOSTICS:
+        value = out.get(key)
+        if isinstance(value, float) and math.isfinite(value) and value > 0:
+            out[key] = _up_to_power_of_ten(value)
+    out["message"] = _SMALL_NUMBER.sub(
+        lambda m: f"< {_up_to_power_of_ten(float(m.group(1))):g}", out.get("message", "")
+    )
+    return out
+
+
+def _animation_key(model: HybridModel, record: dict) -> str:
+    """What an animation is drawn from: the stored gait, the model's and the drawing code's
+    sources and the library versions.  A folder whose ``animation.key`` matches keeps its GIF
+    (drawing one takes most of ``make gaits``' time) instead of drawing it again."""
+    import inspect
+
+    import matplotlib
+    import PIL
+
+    from . import animation, simulation
+
+    digest = hashlib.sha256(json.dumps(record, sort_keys=True).encode())
+    sources = [
+        Path(inspect.getfile(animation)),
+        *sorted(Path(inspect.getfile(simulation)).parent.glob("*.py")),
+        Path(inspect.getfile(type(model))),
+    ]
+    for source in sources:
+        digest.update(source.read_bytes())
+    digest.update(f"{matplotlib.__version__} {PIL.__version__}".encode())
+    return digest.hexdigest()
 
 
 def return_map_interval(cycle: LimitCycle) -> tuple[float, float]:
@@ -101,21 +189,23 @@ def run_model(name: str, out: Path) -> tuple[LimitCycle, list[str], list[str]]:
     cycle = find_limit_cycle(model)
     try:
         with folder_written_whole(out / name, replaces=OWNED) as folder:
-            written, errors = _write_model(model, cycle, folder)
+            written, errors = _write_model(model, cycle, folder, previous=out / name)
     except OSError as exc:  # the solve is kept (its row in the summary); the folder as it was
         return cycle, [], [f"{out / name}: cannot write there ({exc}); nothing was written"]
     return cycle, written, errors
 
 
 def _write_model(
-    model: HybridModel, cycle: LimitCycle, folder: Path
+    model: HybridModel, cycle: LimitCycle, folder: Path, previous: Path | None = None
 ) -> tuple[list[str], list[str]]:
     """``cycle.json`` and, for a gait found, its figures in ``folder``; returns the files
-    written and the figures that failed."""
+    written and the figures that failed.  ``previous``, the folder of the last run, lends its
+    GIF where its :data:`ANIMATION_KEY` matches this run's."""
     from . import animation, plotting  # matplotlib only when drawing
 
     # No solve_time: a tracked result must not change from run to run (timings: `make bench`).
-    write_json(cycle.as_dict(timing=False), folder / "cycle.json")
+    record = certified_record(cycle.as_dict(timing=False))
+    write_json(record, folder / "cycle.json")
     written, errors = ["cycle.json"], []
     if not cycle.success:  # no figures: those of an earlier run would contradict cycle.json
         return written, errors
@@ -145,16 +235,27 @@ def _write_model(
         plotting.save_figure(fig, path)
 
     def walking(path: Path) -> None:
+        key = _animation_key(model, record)
+        old = previous / path.name if previous is not None else None
+        old_key = previous / ANIMATION_KEY if previous is not None else None
+        if old is not None and old.is_file() and old_key.is_file():
+            if old_key.read_text(encoding="utf-8").strip() == key:
+                shutil.copy2(old, path)  # the same gait drawn by the same code: kept
+                (folder / ANIMATION_KEY).write_text(key + "\n", encoding="utf-8")
+                return
         sim = simulate(model, cycle.x, steps=WALK_STEPS, inputs=cycle.inputs)
         if not sim.arcs:
             raise RuntimeError(f"simulation from the fixed point failed: {sim.message}")
         animation.animate_walker(model, sim, path)
+        (folder / ANIMATION_KEY).write_text(key + "\n", encoding="utf-8")
 
     attempt("phase_portrait.png", portrait)
     if len(model.section.coordinates) == 1:
         attempt("return_map.png", staircase)
     if _drawable(model):
         attempt(animation.gif_name(model), walking)
+        if (folder / ANIMATION_KEY).is_file():
+            written.append(ANIMATION_KEY)
     return written, errors
 
 

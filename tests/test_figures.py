@@ -188,9 +188,60 @@ def test_gaits_runner_writes_cycle_json_atomically(tmp_path, capsys):
     assert data["model"] == "rimless_wheel" and data["success"] is True
     assert abs(data["fixed_point"]["theta_dot"] - 1.095462839648) < 1e-8  # Tedrake's ω*
     names = sorted(p.name for p in folder.iterdir())
-    assert names == ["cycle.json", "phase_portrait.png", "return_map.png", "walking.gif"]
+    assert names == [
+        "animation.key", "cycle.json", "phase_portrait.png", "return_map.png", "walking.gif"
+    ]  # fmt: skip
     assert _hidden(tmp_path) == []  # no temporary file left behind
     assert "rimless_wheel" in out.splitlines()[-1] and "True" in out.splitlines()[-1]
+
+
+def test_gaits_runner_keeps_an_animation_drawn_from_the_same_gait(tmp_path, monkeypatch):
+    """A second run of the same gait by the same code keeps the GIF (its animation.key
+    matches); a changed gait draws it again.  (The GIFs are most of `make gaits`' time.)"""
+    import gaitopt.animation
+
+    drawn = []
+    original = gaitopt.animation.animate_walker
+
+    def counting(*args, **kwargs):
+        drawn.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(gaitopt.animation, "animate_walker", counting)
+    args = ["--out", str(tmp_path), "--models", "rimless_wheel"]
+    assert gaits_main(args) == 0 and len(drawn) == 1
+    gif = (tmp_path / "rimless_wheel" / "walking.gif").read_bytes()
+    assert gaits_main(args) == 0 and len(drawn) == 1  # kept, not drawn again
+    assert (tmp_path / "rimless_wheel" / "walking.gif").read_bytes() == gif
+    key = tmp_path / "rimless_wheel" / "animation.key"
+    key.write_text("another gait\n")
+    assert gaits_main(args) == 0 and len(drawn) == 2  # drawn again
+    assert key.read_text().strip() != "another gait"
+
+
+def test_stored_gaits_keep_only_their_certified_digits():
+    """cycle.json (make gaits) stores the numbers to the certificate's accuracy, so that the
+    last-digit noise of another build (here: a relative perturbation of 1e-14, the size of the
+    differences between two builds seen in practice) does not change the stored file, while
+    the numbers stay within that accuracy of the computed ones."""
+    import copy
+
+    from gaitopt.gaits import certified_record
+
+    record = gaitopt.find_limit_cycle(gaitopt.model("compass_gait")).as_dict(timing=False)
+    noisy = copy.deepcopy(record)
+    for name in noisy["fixed_point"]:
+        noisy["fixed_point"][name] *= 1 + 1e-14
+    noisy["period"] *= 1 - 1e-14
+    noisy["residual"] *= 1.7
+    stored = certified_record(record)
+    assert certified_record(noisy) == stored
+    accuracy = max(record["discretisation_error"], record["residual"])
+    for name, value in record["fixed_point"].items():
+        assert abs(stored["fixed_point"][name] - value) <= accuracy
+    assert "residual < 1e-" in stored["message"] and stored["residual"] >= record["residual"]
+    # Drake's CompassGait simulated to convergence (docs/design.md's reference numbers).
+    assert stored["period"] == pytest.approx(0.7344606, abs=5e-8)
 
 
 def test_gaits_runner_reports_a_failed_search(tmp_path, capsys, monkeypatch):

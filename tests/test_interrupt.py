@@ -262,7 +262,7 @@ def test_an_out_under_a_file_falls_back_and_says_where(tmp_path, monkeypatch):
 
 
 def test_make_gaits_interrupted_in_process_exits_130_with_one_line(tmp_path, monkeypatch, capsys):
-    def interrupted(model, cycle, folder):
+    def interrupted(model, cycle, folder, previous=None):
         (folder / "cycle.json").write_text("{}")
         raise KeyboardInterrupt
 
