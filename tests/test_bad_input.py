@@ -314,3 +314,15 @@ def test_make_gaits_cycle_json_holds_no_run_to_run_timing(tmp_path, capsys):
 )
 def test_fuzz_findings(capsys, argv, expected):
     assert expected in bad_input(capsys, *argv)
+
+
+def test_linkage_samples_above_the_limit(capsys):
+    """`linkage jansen --samples 10000000` ran silently for ~25 minutes (issue 25): the count
+    has a stated limit, checked before any work, in the CLI and in the Python API."""
+    from gaitopt.linkage import JansenLinkage
+    from gaitopt.linkage.jansen import MAX_SAMPLES
+
+    line = bad_input(capsys, "linkage", "jansen", "--samples", "10000000")
+    assert "--samples" in line and f"limit {MAX_SAMPLES}" in line
+    with pytest.raises(gaitopt.GaitoptInputError, match=f"above the limit {MAX_SAMPLES}"):
+        JansenLinkage().numbers(10_000_000)

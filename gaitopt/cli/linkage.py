@@ -22,6 +22,7 @@ from typing import Any
 
 from ..errors import ParameterError, did_you_mean
 from ..linkage import LINKAGES
+from ..linkage.jansen import MAX_SAMPLES, SAMPLES_LIMIT
 from ..parameters import check_parameter
 
 __all__ = ["HELP", "add_arguments", "run", "describe"]
@@ -38,12 +39,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME=VALUE",
         help="change a length (m), e.g. --set j=0.52 (repeatable; see `gaitopt linkage jansen`)",
     )
+    from .common import _count
+
     parser.add_argument(
         "--samples",
-        type=int,
+        type=_count(16, MAX_SAMPLES, SAMPLES_LIMIT),
         default=720,
         metavar="N",
-        help="crank steps per turn of the continuation (default 720; at least 16)",
+        help=f"crank steps per turn of the continuation (default 720; 16 to {MAX_SAMPLES})",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
 
