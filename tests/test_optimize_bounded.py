@@ -138,3 +138,34 @@ def test_inactive_bound_leaves_the_unbounded_optimum(compass):
     assert col.structure is None
     assert not any(a.startswith("arcs") for a in loose.active_constraints)
     assert "at the bound" not in loose.message
+
+
+def test_five_link_with_an_active_torque_bound():
+    """OptimTraj's five-link problem (0.4 m in 0.6 s, |q| ≤ π/2, |q̇| ≤ 10) from start 4, with
+    |u| ≤ 25 N·m instead of 100: the unbounded optimum 263.6988459642 (README) peaks at
+    28.06 N·m in the swing knee and below 20.2 N·m elsewhere, so only the swing knee's bound is
+    active, on one arc after heel strike.  Certified with that arc: 263.8033335518 (measured
+    on this commit, to 1e-8 relative), discretisation error 3.3e-10, the simulation's return
+    1.8e-11 and cost 3.8e-14."""
+    model = gaitopt.model("five_link_biped")
+    gait = optimize_gait(
+        model,
+        period=0.6,
+        step_length=0.4,
+        bounds={name: 25.0 for name in model.inputs},
+        state_bounds=model.state_bounds,
+        starts=[4],
+        seed=0,
+    )
+    assert gait.success and gait.verified, gait.message
+    assert gait.discretisation_error <= 1e-8
+    # A bound that binds costs more than the unbounded optimum (README: 263.6988459642).
+    assert gait.cost > 263.6988459642
+    assert gait.cost == pytest.approx(263.8033335518, rel=1e-8)
+    assert "|swing_knee_torque| <= 25" in gait.active_constraints
+    assert "arcs of the input bounds [free/free/free/hi free/free/free/free]" in (
+        gait.active_constraints
+    )
+    assert "at the bound: swing_knee_torque = 25 on [0, 0.03" in gait.message
+    u = gait.profiles[0].vectorised(np.linspace(0.0, gait.period, 6001))
+    assert np.max(np.abs(u)) <= 25.0 + 1e-12
