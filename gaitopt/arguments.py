@@ -18,7 +18,14 @@ import numpy as np
 from .errors import GaitoptInputError, StateError
 from .hybrid import HybridModel
 
-__all__ = ["check_positive", "check_count", "check_start", "check_inputs", "section_guess"]
+__all__ = [
+    "check_positive",
+    "check_count",
+    "check_start",
+    "check_inputs",
+    "section_guess",
+    "check_scheduler",
+]
 
 
 def check_positive(name: str, value: Any, example: str) -> float:
@@ -127,3 +134,19 @@ def section_guess(
             f"`guess` must map section coordinates ({', '.join(model.section.coordinates)}) "
             f"to numbers, got {guess!r}"
         ) from None
+
+
+def check_scheduler(scheduler: object, *, serial: bool = False) -> None:
+    """Refuse a ``scheduler`` that is not ``None``, ``"local"`` (``"serial"`` where ``serial``)
+    or a Dask scheduler address (``"tcp://host:8786"``, ``"host:8786"``) before any work, with
+    one line naming the argument, instead of Dask's error when it tries to connect."""
+    names = ("local", "serial") if serial else ("local",)
+    if scheduler is None or scheduler in names:
+        return
+    address = scheduler.split("://", 1)[-1] if isinstance(scheduler, str) else ""
+    host, _, port = address.rpartition(":")
+    if not (host and port.isdigit()):
+        raise GaitoptInputError(
+            f"`scheduler` must be None, {' or '.join(repr(n) for n in names)} or a Dask "
+            f"scheduler address such as 'tcp://host:8786', got {scheduler!r:.80}"
+        )

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from .arguments import check_scheduler
 from .errors import GaitoptInputError
 from .files import jsonable
 
@@ -107,6 +108,7 @@ def sweep(
     SweepResult
     """
     points = [dict(p) for p in points]
+    check_scheduler(scheduler, serial=True)
     if workers < 1:
         raise GaitoptInputError(f"`workers` must be at least 1, got {workers!r}")
     fingerprint = _fingerprint(task, points)

@@ -266,3 +266,23 @@ def test_every_optimize_advice_names_an_existing_cli_option():
                 assert cli.split()[0] in options, (path.name, name, cli)
                 checked += 1
     assert checked >= 10
+
+
+@pytest.mark.parametrize(
+    "arguments, needle",
+    [
+        ({"bounds": 5}, "`bounds` must be a mapping"),
+        ({"path_constraints": 5}, "`path_constraints` must be a name or a tuple"),
+        ({"free": 5}, "`free` must be a name or a tuple"),
+        ({"free": ("slope", "slope")}, "`free` names a parameter twice"),
+        ({"scheduler": "nope"}, "`scheduler` must be None, 'local' or a Dask"),
+        ({"scheduler": 5}, "`scheduler` must be None"),
+    ],
+)
+def test_optimize_gait_arguments_of_the_wrong_kind(arguments, needle):
+    """Each raised a raw TypeError/ValueError (from tuple(), dict() or Dask's connect) before
+    (issue 25, item 4: raw Python exceptions in the API); now one GaitoptInputError naming the
+    argument, before any work."""
+    model = gaitopt.model("compass_gait", slope=0.0)
+    with pytest.raises(gaitopt.GaitoptInputError, match=re.escape(needle)):
+        gaitopt.optimize_gait(model, period=0.8, step_length=0.3, **arguments)

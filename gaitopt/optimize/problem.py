@@ -68,6 +68,22 @@ def cost_unit(kind: str) -> str:
     return _UNITS.get(kind, "user units")
 
 
+def _names(argument: str, value: Any, example: str) -> tuple[str, ...]:
+    """A name or an iterable of names as a tuple of str, or a one-line input error."""
+    if isinstance(value, str):
+        return (value,)
+    try:
+        names = tuple(value)
+    except TypeError:
+        names = None
+    if names is None or not all(isinstance(n, str) for n in names):
+        raise GaitoptInputError(
+            f"`{argument}` must be a name or a tuple of names, got {value!r:.80}; "
+            f"e.g. {argument}={example}"
+        )
+    return names
+
+
 def _bound_pair(name: str, value: Any) -> tuple[float, float]:
     """``bounds[name]`` as ``(low, high)``: a number ``b >= 0`` means ``(−b, b)``."""
     try:
@@ -259,6 +275,11 @@ class GaitProblem:
                 f"`continuous_inputs` must be True or False, got {self.continuous_inputs!r}"
             )
         states = all_state_names(model)
+        if not isinstance(self.bounds, Mapping):
+            raise GaitoptInputError(
+                f"`bounds` must be a mapping {{input: max}} or {{input: (low, high)}}, got "
+                f"{self.bounds!r:.80}; e.g. bounds={{{(model.inputs or ('u',))[0]!r}: 20}}"
+            )
         for name, value in dict(self.bounds).items():
             if name not in model.inputs and name in states:
                 raise GaitoptInputError(
@@ -288,8 +309,7 @@ class GaitProblem:
                 )
             checked[name] = _state_pair(name, pair)
         object.__setattr__(self, "state_bounds", checked)
-        paths = self.path_constraints
-        paths = (paths,) if isinstance(paths, str) else tuple(paths)
+        paths = _names("path_constraints", self.path_constraints, "('knee_flexion',)")
         declared = declared_limits(model)
         for name in paths:
             if name not in declared:
@@ -308,7 +328,11 @@ class GaitProblem:
             )
         object.__setattr__(self, "path_constraints", paths)
         params = model.params
-        free = tuple(self.free)
+        free = _names("free", self.free, "('slope',)")
+        if len(set(free)) != len(free):
+            raise GaitoptInputError(
+                f"`free` names a parameter twice: {', '.join(free)}; name each once"
+            )
         for name in free:
             if name not in params:
                 raise GaitoptInputError(
@@ -556,19 +580,13 @@ def _state_pair(name: str, pair: Any) -> tuple[float, float]:
 
 
 def as_problem(model: HybridModel, **kwargs: Any) -> GaitProblem:
-    """A :class:`GaitProblem` from keyword arguments (the public API's names)."""
-    bounds = kwargs.pop("bounds", None) or {}
-    state_bounds = kwargs.pop("state_bounds", None) or {}
-    paths = kwargs.pop("path_constraints", None) or ()
-    kwargs["path_constraints"] = (paths,) if isinstance(paths, str) else tuple(paths)
-    free = kwargs.pop("free", None) or ()
-    if isinstance(free, str):
-        free = (free,)
-    if not isinstance(state_bounds, Mapping):
-        raise GaitoptInputError(
-            f"`state_bounds` must be a mapping {{state: (low, high)}}, got {state_bounds!r:.80}; "
-            f"e.g. state_bounds={{{model.state_names[0]!r}: (-1.0, 1.0)}}"
-        )
+    """A :class:`GaitProblem` from keyword arguments (the public API's names; ``None`` is an
+    empty mapping or tuple).  The arguments are checked by :class:`GaitProblem` itself."""
+    for name, empty in (("bounds", {}), ("state_bounds", {}), ("path_constraints", ()),
+                        ("free", ())):  # fmt: skip
+        if kwargs.get(name) is None:
+            kwargs[name] = empty
+    return GaitProblem(model, **kwargs)
     return GaitProblem(
         model, bounds=dict(bounds), state_bounds=dict(state_bounds), free=tuple(free), **kwargs
     )

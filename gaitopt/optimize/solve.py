@@ -19,7 +19,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..arguments import check_count, check_positive
+from ..arguments import check_count, check_positive, check_scheduler
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
 from .active import _active, _violation
@@ -169,6 +169,7 @@ def optimize_gait(
         (:class:`~gaitopt.optimize.guess.WarmStartError`).
     """
     _check_counts(steps=steps, starts=starts, seed=seed, mesh=mesh, tol=tol, verify=verify)
+    check_scheduler(scheduler)
     problem = as_problem(
         model,
         cost=cost,

@@ -104,7 +104,14 @@ def find_limit_cycle(
     """
     start = time.perf_counter()
     # -- arguments: every check before any work (bad input fails fast) ----------------
-    from ..arguments import check_count, check_inputs, check_positive, check_start, section_guess
+    from ..arguments import (
+        check_count,
+        check_inputs,
+        check_positive,
+        check_scheduler,
+        check_start,
+        section_guess,
+    )
     from ..errors import MAX_ORBIT_STEPS, StateError
     from ..models import as_model
 
@@ -116,6 +123,7 @@ def find_limit_cycle(
         "faster than k (gaitopt.errors.MAX_ORBIT_STEPS)"
     )  # fmt: skip
     tol = check_positive("tol", tol, "1e-10")
+    check_scheduler(scheduler)
     u = check_inputs(model, inputs)
     if discretisation is not None and not isinstance(discretisation, MultipleShooting):
         raise GaitoptInputError(
