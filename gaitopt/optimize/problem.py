@@ -564,8 +564,12 @@ def _state_pair(name: str, pair: Any) -> tuple[float, float]:
         low, high = (float(v) for v in pair)
     except (TypeError, ValueError):
         low = high = math.nan
-    if math.isnan(low) or math.isnan(high) or not low < high or low == math.inf or (
-        high == -math.inf
+    if (
+        math.isnan(low)
+        or math.isnan(high)
+        or not low < high
+        or low == math.inf
+        or (high == -math.inf)
     ):
         raise GaitoptInputError(
             f"`state_bounds[{name!r}]` must be a pair (low, high) of numbers with low < high "
@@ -587,6 +591,3 @@ def as_problem(model: HybridModel, **kwargs: Any) -> GaitProblem:
         if kwargs.get(name) is None:
             kwargs[name] = empty
     return GaitProblem(model, **kwargs)
-    return GaitProblem(
-        model, bounds=dict(bounds), state_bounds=dict(state_bounds), free=tuple(free), **kwargs
-    )
