@@ -13,6 +13,7 @@ from .compass_gait import CompassGait
 from .five_link_biped import FiveLinkBiped
 from .kneed_walker import KneedWalker
 from .line_juggler import LineJuggler
+from .one_d_hopper import OneDHopper
 from .planar_juggler import PlanarJuggler
 from .raibert_hopper import RaibertHopper
 from .rimless_wheel import RimlessWheel
@@ -39,6 +40,7 @@ __all__ = [
     "CompassGait",
     "KneedWalker",
     "LineJuggler",
+    "OneDHopper",
     "FiveLinkBiped",
     "PlanarJuggler",
     "BallisticWalker",
@@ -62,6 +64,7 @@ REGISTRY: dict[str, type[HybridModel]] = {
         FiveLinkBiped,
         Slip,
         VerticalHopper,
+        OneDHopper,
         RaibertHopper,
         BouncingBall,
         LineJuggler,
