@@ -290,3 +290,34 @@ def test_kuo_study_push_off_is_the_closed_form(tmp_path):
     # Kuo 2002: the optimal push-off gait's P = v tan α (closed form), to 1e-9 relative.
     summary = _load(_run("optimal_kuo_pushoff", tmp_path), "pushoff.json")
     assert summary["push_off_relative_error"] <= 1e-9
+
+
+# -- one-dimensional hopper (Tedrake's exercise) ---------------------------------------------------
+def test_one_d_hopper_study_finds_the_deadbeat_map_and_the_apex_ratio(tmp_path):
+    # Source: Tedrake, Underactuated Robotics, One-Dimensional Hopper exercise (notebook
+    # exercises/simple_legs/one_d_hopper.ipynb), closed forms in gaitopt.models.one_d_hopper:
+    # the gait h* = h_d = 1 m with multiplier 0; the deadbeat region (0, h_d/ρ] = (0, 1.21] m;
+    # the passive ratio ρ = (10/11)² = 0.826446281; the stroke's highest apex
+    # h_max = k s²/(2 m_b g) − s = 2.18393476 m.  Tolerances: the simulated map (rtol 1e-11)
+    # 1e-8 m, the ratio 1e-9, the shooting's fixed point 1e-9 m and |λ| 1e-9, the continuation's
+    # boundary 1e-7 m; the passive hopper (h_d = 0) has no gait and the report says why.
+    _run("one_d_hopper", tmp_path)
+    summary = _load(tmp_path / "one_d_hopper_study", "summary.json")
+    assert summary["fixed_point"] == pytest.approx(1.0, abs=1e-9)
+    assert summary["multiplier_abs"] < 1e-9
+    assert summary["deadbeat_region_m"] == pytest.approx([0.0, 1.21], abs=1e-12)
+    assert (
+        summary["deadbeat_max_error_m"] < 1e-8 and summary["map_max_error_vs_closed_form_m"] < 1e-8
+    )
+    assert summary["apex_ratio_closed_form"] == pytest.approx((10 / 11) ** 2, rel=1e-15)
+    assert summary["apex_ratio_simulated"] == pytest.approx([(10 / 11) ** 2] * 3, abs=1e-9)
+    assert summary["highest_apex_closed_form_m"] == pytest.approx(2.18393476045, abs=1e-10)
+    assert summary["stroke_boundary_continuation_m"] == pytest.approx(2.18393476045, abs=1e-7)
+    passive = summary["passive_hopper_gait"]
+    assert passive["success"] is False and "no hopping gait" in passive["message"]
+    rows = np.genfromtxt(
+        tmp_path / "one_d_hopper_study" / "apex_map.csv", delimiter=",", skip_header=1,
+        usecols=(0, 1, 2),
+    )  # fmt: skip
+    np.testing.assert_allclose(rows[:, 1], rows[:, 2], atol=1e-8)
+    assert (tmp_path / "one_d_hopper_study" / "apex_map.png").stat().st_size > 0
