@@ -20,6 +20,7 @@ from .rimless_wheel import RimlessWheel
 from .simplest_walker import SimplestWalker
 from .slip import Slip
 from .strandbeest import Strandbeest
+from .three_link_walker import ThreeLinkWalker
 from .vanderpol import VanDerPol
 from .vertical_hopper import VerticalHopper
 
@@ -49,6 +50,7 @@ __all__ = [
     "SimplestWalker",
     "Slip",
     "Strandbeest",
+    "ThreeLinkWalker",
     "VanDerPol",
     "VerticalHopper",
 ]
@@ -71,6 +73,7 @@ REGISTRY: dict[str, type[HybridModel]] = {
         PlanarJuggler,
         BallisticWalker,
         Strandbeest,
+        ThreeLinkWalker,
     )
 }
 
