@@ -130,7 +130,7 @@ class OneDHopper(HybridModel):
     declared_coordinates = ("z_b",)
     declared_section_doc = "apex: z_b_dot = 0, leg on its hard stop (l = 0, l_dot = 0)"
     state_units = {"z_b": "m", "l": "m", "z_b_dot": "m/s", "l_dot": "m/s", "delta": "m"}
-    title = "One-dimensional hopper (massive leg, deadbeat spring preload)"
+    title = "One-dimensional hopper (deadbeat preload)"
     reference = "Tedrake, Underactuated Robotics, One-Dimensional Hopper exercise; Raibert 1984"
     mesh = (4, 4)
     max_phase_time: ClassVar[float] = 10.0
