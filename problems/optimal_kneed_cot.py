@@ -8,21 +8,36 @@ heel and knee strikes, and the torque makes up the difference.  For a fixed step
 L = 0.47 m and speeds v over a range (period T = L/v) the least cost of transport — positive
 actuator work ∫max(0, τω) dt over a step divided by M·g·L — is found with
 :func:`gaitopt.optimize.solve_problem` (exact switching-time transcription of bang, coasting and
-held-hip arcs) from a cold start and, except at the first speed, warm started from its
-neighbour's optimum, then in a second pass warm started from each certified neighbour; the
-starts can reach different local minima, and the lowest certified one is reported (all are in
-the CSV).  A biomechanics reader expects cost against speed to have a
-minimum (Ralston 1958; Srinivasan & Ruina 2006, Nature 439:72, for simple walking models).
+held-hip arcs) as a library across speed, built so that no single start decides a point:
 
-A point is reported as a gait only if it is certified: IPOPT converged on the exact
-transcription, the discretisation error of cost and orbit under mesh doubling is below 1e-8, the
-dense samples keep the knee from striking early and the swing foot above the slope, and the
-independent simulator with the optimal torque as a feedforward returns to the fixed point with
-the same cost.  Otherwise the speed is listed as a failure with the solver's reason.
+* ``cold``: the model's default start (no warm start), at every speed;
+* ``from above``: continuation down in speed from the fastest certified speed, each speed warm
+  started from the lowest certified attempt at its faster neighbour (or at the nearest faster
+  speed that has one; the JSON and CSV name each seed);
+* ``from below``: continuation up in speed likewise, from the slowest certified speed.
+
+The two chains alternate (from above first) and are repeated while a pass finds a lower
+optimum at a seed speed (later passes re-solve only the speeds whose seed improved; labels
+``from above, pass 2`` ...), at most :data:`MAX_PASSES` passes.  The lowest certified attempt is
+reported.  Attempts whose certified costs differ by more than :data:`SAME` (relative) have
+reached different local minima: the speed is flagged (``different_minima``, with every
+certified cost) in the CSV, the JSON and the printed output.  The cost of transport has several
+local minima in the gait and the optimiser returns whichever one its start leads to, as
+"optimal gait found": a single start, or a continuation from one side, is not enough.  A
+biomechanics reader expects cost against speed to have a minimum (Ralston 1958; Srinivasan &
+Ruina 2006, Nature 439:72, for simple walking models).
+
+A start is certified only if IPOPT converged on the exact transcription, the discretisation
+error of cost and orbit under mesh doubling is below 1e-8, the dense samples keep the knee from
+striking early and the swing foot above the slope, and the independent simulator with the
+optimal torque as a feedforward returns to the fixed point with the same cost.  A speed with no
+certified start is listed as a failure with every start's reason (``failed_starts`` also lists
+the reasons of the starts that failed at a certified speed).
 
     python problems/optimal_kneed_cot.py --out results [--fast | --redraw]
 
-Writes results/optimal_kneed_cot/: cot.json, cot.csv, cot.png.
+``--fast`` (for CI): 0.80 and 0.84 m/s only.  Writes results/optimal_kneed_cot/: cot.json,
+cot.csv, cot.png.
 """
 
 from __future__ import annotations
@@ -45,9 +60,13 @@ from gaitopt.plotting import save_figure  # noqa: E402
 SLOPE = 0.03  # rad: a shallow slope (the passive gait's is 0.0504)
 STEP = 0.47  # m, step length L (leg length 1 m)
 BOUNDS = {"hip_torque": 5.0, "knee_torque": 0.0}  # N·m: hip |τ| ≤ 5, knee passive
-ANCHOR = 0.84  # m/s: the first speed solved (near the passive gait's), then outwards
 SPEEDS = np.round(np.arange(0.68, 0.9801, 0.04), 3)  # m/s
-FAST_SPEEDS = np.array([0.84])
+FAST_SPEEDS = np.array([0.80, 0.84])
+CHAINS = ("from above", "from below")  # the continuations, in the order of their first passes
+MAX_PASSES = 6  # chain passes in all (alternating); later passes re-solve only changed seeds
+# Relative: certified starts whose costs differ by more reached different local minima (the
+# same minimum from different starts agrees to the certificate's 1e-8 and better).
+SAME = 1e-6
 
 
 def problem_at(speed: float) -> GaitProblem:
@@ -56,21 +75,93 @@ def problem_at(speed: float) -> GaitProblem:
     return GaitProblem(model, "cot", step_length=STEP, speed=float(speed), bounds=BOUNDS)
 
 
-def continuation_order(speeds: np.ndarray) -> list[tuple[float, float | None]]:
-    """``(speed, neighbour)`` in the order solved: the speed nearest :data:`ANCHOR` first
-    (no neighbour), then outwards on either side, each after its inner neighbour."""
-    speeds = sorted(float(v) for v in speeds)
-    first = min(range(len(speeds)), key=lambda j: abs(speeds[j] - ANCHOR))
-    order = [(speeds[first], None)]
-    order += [(speeds[j], speeds[j + 1]) for j in range(first - 1, -1, -1)]
-    order += [(speeds[j], speeds[j - 1]) for j in range(first + 1, len(speeds))]
-    return order
+def lowest(attempts: list[dict]) -> int | None:
+    """Index of the attempt whose certified optimum costs least (ties: the earliest), or None
+    where none is certified.  Each attempt is ``{"start", "success", "cost", ...}``."""
+    good = [i for i, a in enumerate(attempts) if a["success"]]
+    return min(good, key=lambda i: attempts[i]["cost"]) if good else None
+
+
+def disagreement(attempts: list[dict]) -> str:
+    """Empty where the certified attempts agree to :data:`SAME` (or fewer than two are
+    certified); else every certified attempt's cost, lowest first, e.g.
+    ``"from below 0.01942516337 < from above 0.04333637603"``."""
+    good = sorted((a["cost"], a["start"]) for a in attempts if a["success"])
+    if len(good) < 2 or good[-1][0] <= good[0][0] * (1 + SAME):
+        return ""
+    return " < ".join(f"{k} {c:.10g}" for c, k in good)
+
+
+def _solve(v: float, label: str, seed: tuple[float, int] | None, points: dict) -> None:
+    """Solve at ``v`` (cold, or warm started from attempt ``seed = (speed, index)``), append
+    the attempt to ``points[v]`` and print it."""
+    t0 = time.perf_counter()
+    guess = points[seed[0]][seed[1]]["gait"] if seed else None
+    gait = solve_problem(problem_at(v), guess=guess)
+    elapsed = time.perf_counter() - t0
+    ok = bool(gait.success)
+    seed_text = f"{seed[0]:.2f} {points[seed[0]][seed[1]]['start']}" if seed else None
+    points[v].append({
+        "start": label,
+        "success": ok,
+        "cost": float(gait.cost) if ok else None,
+        "seed": seed_text,
+        "time_s": round(elapsed, 1),
+        "message": gait.message or "(the solver gave no reason)",
+        "gait": gait,
+    })  # fmt: skip
+    where = f" (seed {seed_text})" if seed else ""
+    result = (
+        f"certified, cot {gait.cost:.10g}, discretisation error {gait.discretisation_error:.1e}"
+        if ok
+        else f"FAILED: {gait.message}"
+    )
+    print(f"v = {v:.3f} m/s {label}{where}: {result} ({elapsed:.1f} s)", flush=True)
+
+
+def chain_pass(speeds: list[float], direction: str, points: dict, used: dict) -> int:
+    """One pass of the continuation ``direction`` ("from below": up in speed; "from above":
+    down): each speed warm started from the lowest certified attempt at its neighbour behind it
+    (or at the nearest speed behind with one), unless this chain already started it from a seed
+    as low (to :data:`SAME`): the same minimum again; returns the number of solves."""
+    order = speeds if direction == "from below" else speeds[::-1]
+    seed_speed, solves = None, 0
+    for j, v in enumerate(order):
+        if j and lowest(points[order[j - 1]]) is not None:
+            seed_speed = order[j - 1]
+        if seed_speed is None:
+            continue
+        seed = (seed_speed, lowest(points[seed_speed]))
+        cost = points[seed_speed][seed[1]]["cost"]
+        last = used.get((direction, v))
+        if last is not None and last[0] == seed_speed and cost >= last[1] * (1 - SAME):
+            continue
+        used[direction, v] = (seed_speed, cost)
+        n = sum(a["start"].startswith(direction) for a in points[v])
+        _solve(v, direction if n == 0 else f"{direction}, pass {n + 1}", seed, points)
+        solves += 1
+    return solves
+
+
+def library(speeds: list[float]) -> dict[float, list[dict]]:
+    """Every attempt at every speed: a cold start, then the chains alternately
+    (:data:`CHAINS`) until two passes in a row solve nothing or :data:`MAX_PASSES` are done."""
+    points: dict[float, list[dict]] = {v: [] for v in speeds}
+    for v in speeds:
+        _solve(v, "cold", None, points)
+    used: dict[tuple[str, float], tuple[float, float]] = {}  # the seed each chain last used
+    idle = 0
+    for n in range(MAX_PASSES):
+        idle = 0 if chain_pass(speeds, CHAINS[n % 2], points, used) else idle + 1
+        if idle == 2:
+            break
+    return points
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", default="results", help="results folder")
-    parser.add_argument("--fast", action="store_true", help="one speed, for CI")
+    parser.add_argument("--fast", action="store_true", help="0.80 and 0.84 m/s only, for CI")
     parser.add_argument(
         "--redraw", action="store_true", help="only redraw cot.png from the cot.csv written"
     )
@@ -81,83 +172,64 @@ def main(argv: list[str] | None = None) -> int:
         redraw(folder)
         return 0
 
-    speeds = FAST_SPEEDS if args.fast else SPEEDS
-    solved: dict[float, object] = {}
-    results = {}
-    for v, neighbour in continuation_order(speeds):
-        t0 = time.perf_counter()
-        # Cold start (the model's default start) and, away from the anchor, a warm start from
-        # the neighbour's optimum: local minima differ, the lower certified one is reported.
-        tries = {"cold": solve_problem(problem_at(v))}
-        if neighbour in solved:
-            tries["warm"] = solve_problem(problem_at(v), guess=solved[neighbour])
-        elapsed = time.perf_counter() - t0
-        good = {k: g for k, g in tries.items() if g.success}
-        if good:
-            how = min(good, key=lambda k: good[k].cost)
-            gait = good[how]
-            solved[v] = gait
-        else:
-            how = "none"
-            gait = tries["cold"]
-            gait.message = "; ".join(f"{k} start: {g.message}" for k, g in tries.items())
-        costs = {k: (g.cost if g.success else None) for k, g in tries.items()}
-        results[v] = (gait, how, elapsed, costs)
-        print(
-            f"v = {v:.3f} m/s: success {gait.success} ({how}), cot "
-            f"{gait.cost if gait.success else None} (cold {costs['cold']}, warm "
-            f"{costs.get('warm')}), discretisation error {gait.discretisation_error} "
-            f"({elapsed:.1f} s)" + ("" if gait.success else f"\n    {gait.message}")
-        )
-    # Second pass: each speed warm started from its other neighbour too (the continuation
-    # reached it from one side only), the lower certified cost kept.
-    ordered = sorted(results)
-    for j, v in enumerate(ordered):
-        gait, how, elapsed, costs = results[v]
-        for side, other in (("warm from below", j - 1), ("warm from above", j + 1)):
-            if not 0 <= other < len(ordered) or ordered[other] not in solved:
-                continue
-            t0 = time.perf_counter()
-            trial = solve_problem(problem_at(v), guess=solved[ordered[other]])
-            elapsed += time.perf_counter() - t0
-            costs[side] = trial.cost if trial.success else None
-            if trial.success and (not gait.success or trial.cost < gait.cost * (1 - 1e-9)):
-                gait, how = trial, side
-                solved[v] = trial
-        results[v] = (gait, how, elapsed, costs)
-        print(f"v = {v:.3f} m/s, second pass: {costs} -> {how}")
+    t_start = time.perf_counter()
+    speeds = sorted(float(v) for v in (FAST_SPEEDS if args.fast else SPEEDS))
+    points = library(speeds)
+
     rows, records = [], []
-    for v in sorted(results):
-        gait, how, elapsed, costs = results[v]
-        ok = bool(gait.success)
-        mu = np.abs(gait.multipliers) if gait.multipliers is not None else np.array([])
-        mu_max = float(np.max(mu)) if ok and mu.size else None
+    for v in speeds:
+        attempts = points[v]
+        i = lowest(attempts)
+        ok = i is not None
+        gait = attempts[i]["gait"] if ok else attempts[0]["gait"]
+        flag = disagreement(attempts)
+        mu = np.abs(gait.multipliers) if ok and gait.multipliers is not None else np.array([])
+
+        def best_of(prefix: str, attempts: list[dict] = attempts) -> float | None:
+            costs = [a["cost"] for a in attempts if a["success"] and a["start"].startswith(prefix)]
+            return min(costs) if costs else None
+
         rows.append(
             (v, gait.cost if ok else None, gait.period if ok else None,
-             gait.step_length if ok else None, ok, bool(gait.verified),
-             gait.discretisation_error if ok else None, mu_max, gait.stable if ok else None,
-             how, costs["cold"], costs.get("warm"), costs.get("warm from below"),
-             costs.get("warm from above"), round(elapsed, 1),
-             "" if ok else gait.message)
+             gait.step_length if ok else None, ok, bool(gait.verified) if ok else False,
+             gait.discretisation_error if ok else None, float(np.max(mu)) if mu.size else None,
+             gait.stable if ok else None, attempts[i]["start"] if ok else "none",
+             best_of("cold"), best_of("from below"), best_of("from above"), bool(flag), flag,
+             "; ".join(f"{a['start']}" + (f" (seed {a['seed']})" if a["seed"] else "")
+                       + (f" {a['cost']:.10g}" if a["success"] else " failed") for a in attempts),
+             round(sum(a["time_s"] for a in attempts), 1),
+             "; ".join(f"{a['start']}: {a['message']}" for a in attempts if not a["success"]))
         )  # fmt: skip
-        records.append({"speed": v, "start": how, "costs": costs, "time_s": elapsed,
-                        "gait": gait.to_json()})  # fmt: skip
+        records.append({
+            "speed": v, "start": attempts[i]["start"] if ok else None,
+            "different_minima": flag,
+            "attempts": [{k: x for k, x in a.items() if k != "gait"} for a in attempts],
+            "gait": gait.to_json() if ok else None,
+        })  # fmt: skip
 
-    statement = {
-        "model": "kneed_walker",
-        "slope": SLOPE,
-        "step_length": STEP,
-        "bounds": BOUNDS,
-    }
+    statement = {"model": "kneed_walker", "slope": SLOPE, "step_length": STEP, "bounds": BOUNDS,
+                 "same_minimum_rel": SAME}  # fmt: skip
     write_json({**statement, "points": records}, folder / "cot.json")
     write_csv(
         ["speed_m_per_s", "cost_of_transport", "period_s", "step_length_m", "success", "verified",
          "discretisation_error", "max_abs_multiplier", "stable", "start", "cot_cold_start",
-         "cot_warm_start", "cot_warm_from_below", "cot_warm_from_above", "time_s",
-         "failure_reason"],
+         "cot_from_below", "cot_from_above", "different_minima", "minima", "attempts", "time_s",
+         "failed_starts"],
         rows,
         folder / "cot.csv",
     )  # fmt: skip
+
+    flagged = [r[0] for r in rows if r[13]]
+    print(f"\n{'v (m/s)':>8} {'least cot':>14}  {'start':<22} flags")
+    for r in rows:
+        cot = f"{r[1]:.10g}" if r[4] else "—"
+        note = f"DIFFERENT MINIMA: {r[14]}" if r[13] else ""
+        if not r[4]:
+            note = f"NO CERTIFIED OPTIMUM: {r[17]}"
+        print(f"{r[0]:>8.3f} {cot:>14}  {r[9]:<22} {note}")
+    print(f"{len(flagged)} speed(s) with different local minima: "
+          f"{', '.join(f'{v:.2f}' for v in flagged) or 'none'}; "
+          f"{time.perf_counter() - t_start:.0f} s in all")  # fmt: skip
 
     good = draw([(r[0], r[1], bool(r[4])) for r in rows], folder)
     return 0 if good else 1
