@@ -51,29 +51,6 @@ def gif_name(model: HybridModel) -> str:
     return "walking.gif" if on_ground(model) else "animation.gif"
 
 
-def kneed_outline(model: HybridModel, phase: Phase, x: np.ndarray, pts: np.ndarray) -> np.ndarray:
-    """The kneed walker's legs (foot, knee, hip, knee, foot) and, for curved feet, each foot's
-    circular arc of radius ``foot_radius`` about its centre (±0.6 rad about the leg axis)."""
-    names = phase.point_names
-    legs = [pts[:, names.index(n)] for n in _KNEED_LEGS]
-    segments = legs + [[np.nan, np.nan]]
-    radius = float(model.foot_radius)
-    if radius > 0:
-        shank = "q3" if "q3" in phase.states else "q2"  # knee locked: the shank is the thigh
-        angles = {"stance": x[phase.states.index("q1")], "swing": x[phase.states.index(shank)]}
-        sweep = np.linspace(-0.6, 0.6, 13)
-        for leg, angle in angles.items():
-            centre = pts[:, names.index(f"{leg}_centre")]
-            arc = centre[:, None] - radius * np.vstack(
-                [np.sin(angle + sweep), np.cos(angle + sweep)]
-            )
-            segments += list(arc.T) + [[np.nan, np.nan]]
-    return np.array(segments, dtype=float).T
-
-
-_KNEED_LEGS = ("stance_foot", "stance_knee", "hip", "swing_knee", "swing_foot")
-
-
 def _outline(model: HybridModel, phase: Phase, x: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """The model's declared drawing: its :meth:`outline`, else its :attr:`drawing` polylines,
     else the polyline through every point."""

@@ -77,6 +77,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import casadi as ca
+import numpy as np
 
 from ..errors import ParameterError
 from ..hybrid import Constraint, HybridModel, Phase, Section, Symbols, Transition
@@ -431,9 +432,7 @@ class KneedWalker(HybridModel):
         return (phase0, phase1), section
 
     def outline(self, phase, x, points):
-        """Legs and curved feet, for drawing (:func:`gaitopt.animation.kneed_outline`)."""
-        from ..animation import kneed_outline
-
+        """Legs and curved feet, for drawing (:func:`kneed_outline`)."""
         return kneed_outline(self, phase, x, points)
 
     def default_start(self) -> dict[str, float]:
@@ -452,3 +451,26 @@ class KneedWalker(HybridModel):
             x = ca.SX.sym("x", 4)
             rates = ca.vertcat(x[3] - x[2], ca.SX(0))
         return ca.Function("input_rates", [x, p], [rates], ["x", "p"], ["rates"])
+
+
+def kneed_outline(model: HybridModel, phase: Phase, x: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """The kneed walker's legs (foot, knee, hip, knee, foot) and, for curved feet, each foot's
+    circular arc of radius ``foot_radius`` about its centre (±0.6 rad about the leg axis)."""
+    names = phase.point_names
+    legs = [pts[:, names.index(n)] for n in _KNEED_LEGS]
+    segments = legs + [[np.nan, np.nan]]
+    radius = float(model.foot_radius)
+    if radius > 0:
+        shank = "q3" if "q3" in phase.states else "q2"  # knee locked: the shank is the thigh
+        angles = {"stance": x[phase.states.index("q1")], "swing": x[phase.states.index(shank)]}
+        sweep = np.linspace(-0.6, 0.6, 13)
+        for leg, angle in angles.items():
+            centre = pts[:, names.index(f"{leg}_centre")]
+            arc = centre[:, None] - radius * np.vstack(
+                [np.sin(angle + sweep), np.cos(angle + sweep)]
+            )
+            segments += list(arc.T) + [[np.nan, np.nan]]
+    return np.array(segments, dtype=float).T
+
+
+_KNEED_LEGS = ("stance_foot", "stance_knee", "hip", "swing_knee", "swing_foot")
