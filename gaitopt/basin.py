@@ -1,0 +1,813 @@
+"""Regions of attraction of a gait on its Poincaré section, every start confirmed by simulation.
+
+Three estimates, each from hybrid simulations (:func:`gaitopt.simulate`), never from the
+linearisation:
+
+* :func:`basin` — a star-shaped inner estimate: along each of many rays from the fixed point the
+  largest radius from which a simulation is confirmed to converge, below the first radius found to
+  fail (a coarse scan, then bisection).  It is an inner estimate of the basin **only under the
+  assumption that the basin is star-shaped along each ray** (every point between the fixed point
+  and a converging start converges too, which is sampled, not proven); rays where a larger radius
+  converges after a failure contradict that assumption and are reported as flags;
+* :func:`basin_slice` — a grid over two section coordinates (the others at the fixed point),
+  every point simulated;
+* :func:`basin_fraction` — the fraction of a box on the section from which the gait converges,
+  from uniform random starts, with its Wilson confidence interval.
+
+A start *converges* if its simulation completes, comes within ``tol`` of the fixed point within
+``steps`` returns of the gait's period and stays within ``tol`` for ``hold`` more periods.
+Distances are in *scaled* section coordinates: coordinate ``i`` divided by ``scale[i]`` (default:
+``|x*_i|`` of the fixed point, 1 where that is 0), so radii, windows and ``tol`` are
+dimensionless fractions of the scale.
+
+Each estimate runs on :func:`gaitopt.sweep.sweep`, one task per chunk of rays or starts:
+serially by default (``scheduler=None``), on a local Dask cluster (``"local"``) or a running
+scheduler (``"tcp://host:8786"``).
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .arguments import check_count, check_positive, check_scheduler
+from .errors import GaitoptInputError
+
+__all__ = ["basin", "basin_slice", "basin_fraction", "Basin", "BasinSlice", "BasinFraction"]
+
+#: Most rays, grid points per axis and samples: each is at least one simulation of
+#: ``steps + hold`` periods.
+MAX_RAYS = 4096
+MAX_POINTS = 400
+MAX_SAMPLES = 100_000
+MAX_STEPS = 10_000
+_LIMIT = "each is one simulation of up to steps + hold periods; run several smaller estimates"
+#: Returns simulated per call while a start is followed (it stops once converged and held).
+_CHUNK_PERIODS = 10
+#: Two-sided 95 % normal quantile of the Wilson interval.
+_Z95 = 1.959963984540054
+
+
+# -- results ---------------------------------------------------------------------------------
+@dataclass
+class Basin:
+    """The star-shaped estimate of a gait's basin (:func:`basin`).
+
+    Attributes
+    ----------
+    success : bool
+        The estimate was computed (False for an unstable gait: its basin is empty).
+    message : str
+        What was found, the star-shaped assumption, or why the basin is empty.
+    model : HybridModel
+        The gait's model.
+    coordinates : tuple of str
+        Section coordinates the rays span (the others stay at the fixed point).
+    fixed_point : dict of str to float
+        The gait's fixed point in section coordinates (units of the model's states).
+    scale : numpy.ndarray
+        Scale of each coordinate of ``coordinates`` (their units): radii are in units of it.
+    directions : numpy.ndarray
+        Unit vectors of the rays in scaled coordinates, ``rays × len(coordinates)``.
+    radii : numpy.ndarray
+        Per ray, the largest radius (dimensionless, scaled) confirmed by simulation to converge
+        below the first failure found; 0 if none was; ``max_radius`` if nothing failed.
+    first_failure : numpy.ndarray
+        Per ray, the smallest radius found to fail (NaN if none up to ``max_radius``).
+    capped : numpy.ndarray
+        Per ray, whether nothing failed up to ``max_radius`` (the radius is then only a bound).
+    flags : list of dict
+        Non-monotone rays: ``{"ray", "first_failure", "converges_at"}`` — radii beyond the first
+        failure from which the simulation converges (the basin is not star-shaped there).
+    max_radius : float
+        Largest radius probed (scaled).
+    settings : dict
+        ``steps``, ``hold``, ``tol``, ``scan``, ``bisections``.
+    simulations : int
+        Starts simulated.
+    elapsed : float
+        Wall-clock seconds.
+    """
+
+    success: bool
+    message: str
+    model: Any
+    coordinates: tuple[str, ...]
+    fixed_point: dict[str, float]
+    scale: np.ndarray
+    directions: np.ndarray
+    radii: np.ndarray
+    first_failure: np.ndarray
+    capped: np.ndarray
+    flags: list[dict[str, Any]] = field(default_factory=list)
+    max_radius: float = 1.0
+    settings: dict[str, Any] = field(default_factory=dict)
+    simulations: int = 0
+    elapsed: float = 0.0
+
+    def endpoints(self) -> np.ndarray:
+        """The rays' end points in section coordinates of ``coordinates`` (their units)."""
+        centre = np.array([self.fixed_point[c] for c in self.coordinates])
+        return centre + self.radii[:, None] * self.directions * self.scale
+
+    def claims(self, points: np.ndarray) -> np.ndarray:
+        """Which points (rows, in ``coordinates``, their units) the estimate claims converge.
+
+        One coordinate: between the two rays' ends.  Two: within the smaller radius of the two
+        rays whose angles enclose the point's angle (a conservative sector between adjacent
+        rays).  Both rest on the star-shaped assumption.
+
+        Raises
+        ------
+        GaitoptInputError
+            For rays in more than two coordinates.
+        """
+        centre = np.array([self.fixed_point[c] for c in self.coordinates])
+        z = (np.atleast_2d(np.asarray(points, dtype=float)) - centre) / self.scale
+        if z.shape[1] == 1:
+            up = self.radii[self.directions[:, 0] > 0].min(initial=0.0)
+            down = self.radii[self.directions[:, 0] < 0].min(initial=0.0)
+            return (z[:, 0] <= up) & (z[:, 0] >= -down)
+        if z.shape[1] != 2:
+            raise GaitoptInputError(
+                f"`points`: claims() takes rays in one or two coordinates, these span "
+                f"{len(self.coordinates)}; use coordinates=(A, B) in basin()"
+            )
+        angles = np.arctan2(self.directions[:, 1], self.directions[:, 0]) % (2 * np.pi)
+        order = np.argsort(angles)
+        angles, radii = angles[order], self.radii[order]
+        phi = np.arctan2(z[:, 1], z[:, 0]) % (2 * np.pi)
+        after = np.searchsorted(angles, phi) % len(angles)
+        before = (after - 1) % len(angles)
+        bound = np.minimum(radii[after], radii[before])
+        return np.hypot(z[:, 0], z[:, 1]) <= bound
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-able summary (``gaitopt basin --json``)."""
+        return {
+            "model": self.model.name,
+            "params": self.model.params,
+            "success": bool(self.success),
+            "message": self.message,
+            "coordinates": list(self.coordinates),
+            "fixed_point": dict(self.fixed_point),
+            "scale": self.scale.tolist(),
+            "max_radius": self.max_radius,
+            "directions": self.directions.tolist(),
+            "radii": self.radii.tolist(),
+            "first_failure": [None if math.isnan(r) else r for r in self.first_failure],
+            "capped": self.capped.tolist(),
+            "endpoints": self.endpoints().tolist(),
+            "flags": self.flags,
+            "settings": self.settings,
+            "assumption": "inner estimate only if the basin is star-shaped along each ray",
+            "simulations": self.simulations,
+            "elapsed_s": self.elapsed,
+        }
+
+
+@dataclass
+class BasinSlice:
+    """A grid of simulated starts over two section coordinates (:func:`basin_slice`).
+
+    Attributes
+    ----------
+    coordinates : tuple of str
+        The two coordinates varied (the others at the fixed point).
+    values : tuple of numpy.ndarray
+        Grid values of each (their units).
+    converged : numpy.ndarray
+        ``len(values[1]) × len(values[0])`` booleans: the start converged.
+    outcomes : numpy.ndarray
+        The same grid: ``"converged"`` or why not (``"fell"``, ``"standing"``, ``"not
+        converged"``, ``"invalid start"``…).
+    fixed_point : dict of str to float
+        The gait's fixed point.
+    model : HybridModel
+        The gait's model.
+    settings : dict
+        ``steps``, ``hold``, ``tol``.
+    elapsed : float
+        Wall-clock seconds.
+    """
+
+    coordinates: tuple[str, str]
+    values: tuple[np.ndarray, np.ndarray]
+    converged: np.ndarray
+    outcomes: np.ndarray
+    fixed_point: dict[str, float]
+    model: Any
+    settings: dict[str, Any]
+    elapsed: float
+
+    @property
+    def fraction(self) -> float:
+        """Fraction of the grid's starts that converge."""
+        return float(np.mean(self.converged))
+
+    def points(self) -> np.ndarray:
+        """The grid's starts in the two coordinates, rows in the order of ``converged.ravel()``."""
+        a, b = np.meshgrid(*self.values)
+        return np.column_stack([a.ravel(), b.ravel()])
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-able summary."""
+        return {
+            "coordinates": list(self.coordinates),
+            "values": [v.tolist() for v in self.values],
+            "converged": self.converged.astype(int).tolist(),
+            "outcomes": self.outcomes.tolist(),
+            "fraction": self.fraction,
+            "fixed_point": dict(self.fixed_point),
+            "settings": self.settings,
+            "elapsed_s": self.elapsed,
+        }
+
+
+@dataclass
+class BasinFraction:
+    """Sampled fraction of a window on the section that converges (:func:`basin_fraction`).
+
+    Attributes
+    ----------
+    fraction : float
+        Converged starts / samples.
+    interval : tuple of float
+        Wilson score interval of the fraction at ``confidence``.
+    confidence : float
+        0.95.
+    samples, converged : int
+        Starts simulated and how many converged.
+    window : dict of str to (float, float)
+        The box sampled, per section coordinate (its unit).
+    settings : dict
+        ``steps``, ``hold``, ``tol``, ``seed``.
+    elapsed : float
+        Wall-clock seconds.
+    """
+
+    fraction: float
+    interval: tuple[float, float]
+    confidence: float
+    samples: int
+    converged: int
+    window: dict[str, tuple[float, float]]
+    settings: dict[str, Any]
+    elapsed: float
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-able summary."""
+        return {
+            "fraction": self.fraction,
+            "interval": list(self.interval),
+            "confidence": self.confidence,
+            "samples": self.samples,
+            "converged": self.converged,
+            "window": {k: list(v) for k, v in self.window.items()},
+            "settings": self.settings,
+            "elapsed_s": self.elapsed,
+        }
+
+
+def wilson_interval(successes: int, n: int, z: float = _Z95) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion.
+
+    >>> [round(v, 4) for v in wilson_interval(5, 10)]
+    [0.2366, 0.7634]
+    """
+    p = successes / n
+    denominator = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denominator
+    half = z / denominator * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+# -- checks and the simulation of one start ---------------------------------------------------
+@dataclass(frozen=True)
+class _Setup:
+    """What every task needs: JSON-able, so that a chunk is a point of :func:`sweep`."""
+
+    model: str
+    params: dict[str, float]
+    coordinates: list[str]  # every section coordinate, in the section's order
+    centre: list[float]  # the fixed point in those
+    inputs: list[float] | None
+    period: int  # returns per period of the gait
+    steps: int
+    hold: int
+    tol: float
+    scale: list[float]  # per section coordinate
+
+    def point(self, **extra: Any) -> dict[str, Any]:
+        return {"setup": self.__dict__, **extra}
+
+
+def _setup(gait: Any, steps: Any, hold: Any, tol: Any, scale: Any) -> _Setup:
+    """Check the gait and the shared settings; one-line errors naming the argument."""
+    from .models import model as make_model
+
+    if not all(hasattr(gait, name) for name in ("model", "section_point", "success")):
+        raise GaitoptInputError(
+            f"`gait` must be a gait (from gaitopt.find_limit_cycle), got {type(gait).__name__}"
+        )
+    if not gait.success:
+        reason = " ".join(str(getattr(gait, "message", "")).split())[:160]
+        raise GaitoptInputError(f"`gait` is not a gait (success is False: {reason})")
+    steps = check_count("steps", steps, 1, MAX_STEPS, _LIMIT)
+    hold = check_count("hold", hold, 1, MAX_STEPS, _LIMIT)
+    tol = check_positive("tol", tol, "1e-4")
+    model = gait.model
+    coordinates = list(model.section.coordinates)
+    centre = np.asarray(gait.section_point, dtype=float).ravel()
+    if scale is None:
+        scale = np.where(np.abs(centre) > 0, np.abs(centre), 1.0)
+    else:
+        scale = _per_coordinate("scale", scale, coordinates)
+    try:
+        rebuilt = make_model(model.name, **model.params)
+    except GaitoptInputError:
+        rebuilt = None
+    if rebuilt is None or rebuilt.params != model.params:
+        raise GaitoptInputError(
+            f"`gait`: its model {model.name!r} cannot be rebuilt by name and parameters for the "
+            f"simulation tasks; register it (gaitopt.register)"
+        )
+    inputs = np.asarray(getattr(gait, "inputs", ()), dtype=float).ravel()
+    return _Setup(
+        model.name,
+        dict(model.params),
+        coordinates,
+        centre.tolist(),
+        inputs.tolist() if inputs.size else None,
+        int(getattr(gait, "steps", 1) or 1),
+        steps,
+        hold,
+        tol,
+        [float(s) for s in scale],
+    )
+
+
+def _per_coordinate(name: str, value: Any, coordinates: Sequence[str]) -> np.ndarray:
+    """``scale`` (or a window's half width): a positive number, one per coordinate, or a mapping
+    by coordinate name (missing names: error)."""
+    if isinstance(value, Mapping):
+        unknown = set(value) - set(coordinates)
+        if unknown:
+            raise GaitoptInputError(
+                f"`{name}`: {sorted(unknown)[0]!r} is not a section coordinate "
+                f"({', '.join(coordinates)})"
+            )
+        missing = [c for c in coordinates if c not in value]
+        if missing:
+            raise GaitoptInputError(f"`{name}` has no entry for {missing[0]!r}")
+        value = [value[c] for c in coordinates]
+    if isinstance(value, numbers.Real):
+        value = [value] * len(coordinates)
+    values = list(np.asarray(value, dtype=object).ravel())
+    if len(values) != len(coordinates):
+        raise GaitoptInputError(
+            f"`{name}` needs {len(coordinates)} values ({', '.join(coordinates)}), got "
+            f"{len(values)}"
+        )
+    return np.array([check_positive(name, v, "0.1") for v in values])
+
+
+def _unstable(gait: Any) -> str | None:
+    """Why no neighbourhood of the fixed point converges (a multiplier outside the unit circle)."""
+    multipliers = np.abs(np.asarray(getattr(gait, "multipliers", ()), dtype=complex))
+    if multipliers.size and multipliers.max() > 1:
+        return (
+            f"the gait is unstable: a multiplier has |λ| = {multipliers.max():.6g} > 1, so no "
+            f"neighbourhood of the fixed point converges; the basin is empty"
+        )
+    return None
+
+
+def _classify(setup: Mapping[str, Any], model: Any, start: np.ndarray) -> str:
+    """``"converged"`` or why not, for one start in section coordinates (every coordinate)."""
+    from .errors import StateError
+    from .simulation import simulate
+
+    centre, scale = np.asarray(setup["centre"]), np.asarray(setup["scale"])
+    period, tol = setup["period"], setup["tol"]
+    total = (setup["steps"] + setup["hold"]) * period
+    x: Any = dict(zip(setup["coordinates"], map(float, start), strict=True))
+    done, inside = 0, 0  # returns simulated; consecutive periods within tol
+    while done < total:
+        chunk = min(_CHUNK_PERIODS * period, total - done)
+        try:
+            sim = simulate(model, x, steps=chunk, inputs=setup["inputs"])
+        except (GaitoptInputError, StateError):  # not a start of this model (off its section)
+            return "invalid start"
+        for k in range(1, sim.steps + 1):
+            if (done + k) % period:
+                continue
+            offset = model.section_coordinates_of(sim.section_states[k]) - centre
+            error = float(np.max(np.abs(offset) / scale))
+            inside = inside + 1 if np.isfinite(error) and error <= tol else 0
+            if inside > setup["hold"]:
+                return "converged"
+            if not inside and (done + k) // period >= setup["steps"]:
+                return "not converged"
+        if not sim.success:
+            return sim.status
+        done += chunk
+        x = sim.section_states[-1]
+    return "not converged"
+
+
+def _model_of(setup: Mapping[str, Any]) -> Any:
+    from .models import model as make_model
+
+    return make_model(setup["model"], **setup["params"])
+
+
+def _starts_task(point: Mapping[str, Any]) -> dict[str, Any]:
+    """A chunk of starts (section coordinates) → their outcomes (a task of :func:`sweep`)."""
+    setup = point["setup"]
+    model = _model_of(setup)
+    return {"outcomes": [_classify(setup, model, np.asarray(s)) for s in point["starts"]]}
+
+
+def _rays_task(point: Mapping[str, Any]) -> dict[str, Any]:
+    """A chunk of rays → per ray the radius, first failure and scan (a task of :func:`sweep`)."""
+    setup = point["setup"]
+    model = _model_of(setup)
+    centre, scale = np.asarray(setup["centre"]), np.asarray(setup["scale"])
+    index = [setup["coordinates"].index(c) for c in point["coordinates"]]
+    scan, bisections, top = point["scan"], point["bisections"], point["max_radius"]
+    rays = []
+    for direction in point["directions"]:
+        step = np.zeros_like(centre)
+        step[index] = np.asarray(direction) * scale[index]
+
+        def converges(r: float, step: np.ndarray = step) -> bool:
+            return _classify(setup, model, centre + r * step) == "converged"
+
+        grid = [top * k / scan for k in range(1, scan + 1)]
+        fates = [converges(r) for r in grid]
+        runs = len(grid)
+        failed = [r for r, ok in zip(grid, fates, strict=True) if not ok]
+        if not failed:
+            rays.append({"radius": top, "first_failure": None, "beyond": [], "runs": runs})
+            continue
+        high = failed[0]
+        low = max([0.0] + [r for r, ok in zip(grid, fates, strict=True) if ok and r < high])
+        for _ in range(bisections):
+            middle = 0.5 * (low + high)
+            low, high = (middle, high) if converges(middle) else (low, middle)
+            runs += 1
+        beyond = [r for r, ok in zip(grid, fates, strict=True) if ok and r > failed[0]]
+        rays.append({"radius": low, "first_failure": high, "beyond": beyond, "runs": runs})
+    return {"rays": rays}
+
+
+def _run(task: Any, points: list[dict[str, Any]], scheduler: str | None) -> list[dict[str, Any]]:
+    from .sweep import sweep
+
+    check_scheduler(scheduler, serial=True)
+    result = sweep(
+        task, points, scheduler=scheduler or "serial", progress=False, description="basin"
+    )
+    return result.results
+
+
+def _directions(rays: int, dimension: int, seed: int) -> np.ndarray:
+    """Unit vectors: ±1 in one dimension, equal angles in two, otherwise pairs ±v of normalised
+    Gaussian vectors (seeded) so that every direction has its opposite."""
+    if dimension == 1:
+        return np.array([[1.0], [-1.0]])[: min(rays, 2)]
+    if dimension == 2:
+        angles = 2 * np.pi * np.arange(rays) / rays
+        return np.column_stack([np.cos(angles), np.sin(angles)])
+    rng = np.random.default_rng(seed)
+    half = rng.standard_normal(((rays + 1) // 2, dimension))
+    half /= np.linalg.norm(half, axis=1, keepdims=True)
+    return np.concatenate([half, -half])[:rays]
+
+
+def _chosen(name: str, given: Sequence[str] | None, coordinates: Sequence[str], n: int | None):
+    """Coordinates named by ``given`` (all if None), each a section coordinate."""
+    chosen = list(coordinates) if given is None else list(given)
+    for c in chosen:
+        if c not in coordinates:
+            raise GaitoptInputError(
+                f"`{name}`: {c!r} is not a section coordinate ({', '.join(coordinates)})"
+            )
+    if len(set(chosen)) != len(chosen) or not chosen or (n is not None and len(chosen) != n):
+        count = f"{n} different" if n else "different"
+        raise GaitoptInputError(f"`{name}` must name {count} section coordinates, got {chosen}")
+    return chosen
+
+
+# -- the estimates ---------------------------------------------------------------------------
+def basin(
+    gait: Any,
+    *,
+    rays: int = 16,
+    steps: int = 40,
+    hold: int = 5,
+    tol: float = 1e-4,
+    scale: float | Sequence[float] | Mapping[str, float] | None = None,
+    max_radius: float = 1.0,
+    scan: int = 8,
+    bisections: int = 10,
+    coordinates: Sequence[str] | None = None,
+    seed: int = 0,
+    chunk: int = 4,
+    scheduler: str | None = None,
+) -> Basin:
+    """Star-shaped inner estimate of a gait's basin on its Poincaré section, by bisection along
+    rays, every classified start confirmed by simulation.
+
+    Along each ray ``x* + r · scale ⊙ d`` the radii ``max_radius · k / scan`` (k = 1…scan) are
+    simulated; between the largest converging radius below the first failure and that failure,
+    ``bisections`` halvings follow.  The ray's radius is the largest radius confirmed to
+    converge below the first failure found.  The set of segments is an inner estimate of the
+    basin **only if the basin is star-shaped along each ray**; a ray on which a scan radius
+    beyond the first failure converges is flagged (non-monotone).
+
+    Parameters
+    ----------
+    gait : LimitCycle
+        A successful gait (``model``, ``section_point``, ``multipliers``; ``inputs``, the per-step
+        input, and ``steps``, its period in returns, if it has them).
+    rays : int
+        Number of rays (one coordinate: 2, up and down).
+    steps : int
+        Periods within which a start must come within ``tol`` of the fixed point.
+    hold : int
+        Further periods it must stay within ``tol``.
+    tol : float
+        Tolerance (dimensionless: a fraction of ``scale`` in each coordinate).
+    scale : float, sequence or mapping, optional
+        Scale of each section coordinate (its unit: rad, rad/s, m…); default ``|x*_i|`` (1 where
+        that is 0).
+    max_radius : float
+        Largest radius probed (dimensionless, in units of ``scale``).
+    scan : int
+        Radii of the coarse scan along each ray.
+    bisections : int
+        Halvings of the bracket of the first failure: radii are exact to ``max_radius / scan /
+        2**bisections`` (scaled), on the ray's samples.
+    coordinates : sequence of str, optional
+        Section coordinates the rays span (default all; the others stay at the fixed point).
+    seed : int
+        Seed of the directions in three or more coordinates.
+    chunk : int
+        Rays per task of the sweep.
+    scheduler : str, optional
+        None (serial, in this process), ``"local"`` (a local Dask cluster) or a Dask address.
+
+    Returns
+    -------
+    Basin
+
+    Raises
+    ------
+    GaitoptInputError
+        For a gait that is not a success, a count below 1 or a ``tol``, ``scale`` or
+        ``max_radius`` that is not positive (one line naming the argument).
+    """
+    started = time.perf_counter()
+    setup = _setup(gait, steps, hold, tol, scale)
+    rays = check_count("rays", rays, 1, MAX_RAYS, _LIMIT)
+    scan = check_count("scan", scan, 1, 1000, _LIMIT)
+    bisections = check_count("bisections", bisections, 0, 60, "halvings beyond 60 reach rounding")
+    chunk = check_count("chunk", chunk, 1, MAX_RAYS, _LIMIT)
+    max_radius = check_positive("max_radius", max_radius, "0.5")
+    chosen = _chosen("coordinates", coordinates, setup.coordinates, None)
+    check_scheduler(scheduler, serial=True)
+    index = [setup.coordinates.index(c) for c in chosen]
+    directions = _directions(rays, len(chosen), seed)
+    n = len(directions)
+    settings = {
+        "steps": setup.steps,
+        "hold": setup.hold,
+        "tol": setup.tol,
+        "scan": scan,
+        "bisections": bisections,
+        "seed": seed,
+    }
+    common = dict(
+        model=gait.model,
+        coordinates=tuple(chosen),
+        fixed_point=dict(zip(setup.coordinates, setup.centre, strict=True)),
+        scale=np.asarray(setup.scale)[index],
+        directions=directions,
+        max_radius=max_radius,
+        settings=settings,
+    )
+    reason = _unstable(gait)
+    if reason is not None:
+        zeros = np.zeros(n)
+        return Basin(
+            False,
+            reason,
+            radii=zeros,
+            first_failure=np.zeros(n),
+            capped=np.zeros(n, bool),
+            elapsed=time.perf_counter() - started,
+            **common,
+        )
+    points = [
+        setup.point(
+            directions=directions[i : i + chunk].tolist(),
+            coordinates=chosen,
+            scan=scan,
+            bisections=bisections,
+            max_radius=max_radius,
+        )
+        for i in range(0, n, chunk)
+    ]
+    found = [ray for r in _run(_rays_task, points, scheduler) for ray in r["rays"]]
+    radii = np.array([ray["radius"] for ray in found], dtype=float)
+    failure = np.array(
+        [np.nan if ray["first_failure"] is None else ray["first_failure"] for ray in found],
+        dtype=float,
+    )
+    flags = [
+        {"ray": i, "first_failure": ray["first_failure"], "converges_at": ray["beyond"]}
+        for i, ray in enumerate(found)
+        if ray["beyond"]
+    ]
+    capped = np.isnan(failure)
+    message = (
+        f"{n} rays in ({', '.join(chosen)}): radius {radii.min():.4g}…{radii.max():.4g} (scaled), "
+        f"{int(capped.sum())} reach max_radius {max_radius:g}; an inner estimate only if the "
+        f"basin is star-shaped along each ray"
+        + (f"; {len(flags)} non-monotone ray(s) flagged (not star-shaped)" if flags else "")
+    )
+    return Basin(
+        True,
+        message,
+        radii=radii,
+        first_failure=failure,
+        capped=capped,
+        flags=flags,
+        simulations=sum(ray["runs"] for ray in found),
+        elapsed=time.perf_counter() - started,
+        **common,
+    )
+
+
+def _window(setup: _Setup, window: Any) -> dict[str, tuple[float, float]]:
+    """The box: ``{name: (low, high)}`` given, or ``x* ± half widths · scale`` from a number or
+    one half width per coordinate (scaled)."""
+    if isinstance(window, Mapping) and all(
+        isinstance(v, Sequence) and not isinstance(v, str) for v in window.values()
+    ):
+        box = {}
+        for c in setup.coordinates:
+            if c not in window:
+                raise GaitoptInputError(f"`window` has no range for {c!r}")
+            low, high = (float(v) for v in window[c])
+            if not (math.isfinite(low) and math.isfinite(high) and low < high):
+                raise GaitoptInputError(
+                    f"`window` range of {c!r} must be low < high, got {window[c]!r}"
+                )
+            box[c] = (low, high)
+        return box
+    half = _per_coordinate("window", window, setup.coordinates) * np.asarray(setup.scale)
+    return {
+        c: (float(x - h), float(x + h))
+        for c, x, h in zip(setup.coordinates, setup.centre, half, strict=True)
+    }
+
+
+def _outcomes(setup: _Setup, starts: np.ndarray, chunk: int, scheduler: str | None) -> list[str]:
+    points = [
+        setup.point(starts=starts[i : i + chunk].tolist()) for i in range(0, len(starts), chunk)
+    ]
+    return [o for r in _run(_starts_task, points, scheduler) for o in r["outcomes"]]
+
+
+def basin_slice(
+    gait: Any,
+    coordinates: Sequence[str],
+    *,
+    points: int = 21,
+    window: Any = 1.0,
+    steps: int = 40,
+    hold: int = 5,
+    tol: float = 1e-4,
+    scale: Any = None,
+    chunk: int = 20,
+    scheduler: str | None = None,
+) -> BasinSlice:
+    """Every start of a grid over two section coordinates simulated (the others at the fixed
+    point): which converge to the gait.
+
+    Parameters
+    ----------
+    gait : LimitCycle
+        A successful gait.
+    coordinates : (str, str)
+        The two section coordinates varied.
+    points : int
+        Grid points per axis (the window's ends included).
+    window : float, sequence or mapping
+        Half widths (scaled: fractions of ``scale``) around the fixed point, or ``{name: (low,
+        high)}`` in the coordinates' units.
+    steps, hold, tol, scale
+        As in :func:`basin`.
+    chunk : int
+        Starts per task of the sweep.
+    scheduler : str, optional
+        As in :func:`basin`.
+
+    Returns
+    -------
+    BasinSlice
+    """
+    started = time.perf_counter()
+    setup = _setup(gait, steps, hold, tol, scale)
+    points = check_count("points", points, 2, MAX_POINTS, _LIMIT)
+    chunk = check_count("chunk", chunk, 1, MAX_POINTS**2, _LIMIT)
+    pair = _chosen("coordinates", coordinates, setup.coordinates, 2)
+    check_scheduler(scheduler, serial=True)
+    box = _window(setup, window)
+    values = tuple(np.linspace(*box[c], points) for c in pair)
+    a, b = np.meshgrid(*values)
+    starts = np.tile(np.asarray(setup.centre), (a.size, 1))
+    starts[:, setup.coordinates.index(pair[0])] = a.ravel()
+    starts[:, setup.coordinates.index(pair[1])] = b.ravel()
+    outcomes = np.array(_outcomes(setup, starts, chunk, scheduler)).reshape(a.shape)
+    return BasinSlice(
+        tuple(pair),
+        values,
+        outcomes == "converged",
+        outcomes,
+        dict(zip(setup.coordinates, setup.centre, strict=True)),
+        gait.model,
+        {"steps": setup.steps, "hold": setup.hold, "tol": setup.tol, "window": box},
+        time.perf_counter() - started,
+    )
+
+
+def basin_fraction(
+    gait: Any,
+    *,
+    samples: int = 200,
+    window: Any = 1.0,
+    steps: int = 40,
+    hold: int = 5,
+    tol: float = 1e-4,
+    scale: Any = None,
+    seed: int = 0,
+    chunk: int = 20,
+    scheduler: str | None = None,
+) -> BasinFraction:
+    """Fraction of a box on the section from which the gait converges, from uniform random
+    starts (each simulated), with its 95 % Wilson interval.
+
+    Parameters
+    ----------
+    gait : LimitCycle
+        A successful gait.
+    samples : int
+        Starts drawn uniformly in the box (seeded).
+    window : float, sequence or mapping
+        Half widths (scaled) around the fixed point, or ``{name: (low, high)}`` for every
+        section coordinate (their units).
+    steps, hold, tol, scale
+        As in :func:`basin`.
+    seed : int
+        Seed of the starts.
+    chunk : int
+        Starts per task of the sweep.
+    scheduler : str, optional
+        As in :func:`basin`.
+
+    Returns
+    -------
+    BasinFraction
+        For an unstable gait the starts are still simulated (none converges near it).
+    """
+    started = time.perf_counter()
+    setup = _setup(gait, steps, hold, tol, scale)
+    samples = check_count("samples", samples, 1, MAX_SAMPLES, _LIMIT)
+    chunk = check_count("chunk", chunk, 1, MAX_SAMPLES, _LIMIT)
+    check_scheduler(scheduler, serial=True)
+    box = _window(setup, window)
+    low = np.array([box[c][0] for c in setup.coordinates])
+    high = np.array([box[c][1] for c in setup.coordinates])
+    starts = low + (high - low) * np.random.default_rng(seed).random((samples, len(low)))
+    outcomes = _outcomes(setup, starts, chunk, scheduler)
+    k = sum(o == "converged" for o in outcomes)
+    return BasinFraction(
+        k / samples,
+        wilson_interval(k, samples),
+        0.95,
+        samples,
+        k,
+        box,
+        {"steps": setup.steps, "hold": setup.hold, "tol": setup.tol, "seed": seed},
+        time.perf_counter() - started,
+    )
