@@ -11,7 +11,7 @@ import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import casadi as ca
 import numpy as np
@@ -19,11 +19,20 @@ import numpy as np
 from ..errors import GaitoptInputError
 from ..integrators import segment_function
 
-if TYPE_CHECKING:
-    from .deadbeat_solver import Deadbeat
+
+class DeadbeatSolver(Protocol):
+    """What the generated policy uses of a :class:`~gaitopt.control.deadbeat_solver.Deadbeat`:
+    that module sits above this one (its ``policy_function``/``codegen`` call this module's),
+    so the functions here name the solver by the members they read."""
+
+    cycle: Any
+    model: Any
+    shooting: Any
+    m: int
+    n_u: int
 
 
-def policy_function(solver: Deadbeat, steps: Sequence[int] | None = None) -> ca.Function:
+def policy_function(solver: DeadbeatSolver, steps: Sequence[int] | None = None) -> ca.Function:
     """The deadbeat policy as one CasADi function ``u, T, residual = policy(s, s_target, p)``.
 
     Single shooting through the phase chain (unknowns: the phase durations and ``u``; each
@@ -83,7 +92,7 @@ def policy_function(solver: Deadbeat, steps: Sequence[int] | None = None) -> ca.
     )
 
 
-def _policy_steps(solver: Deadbeat, tol: float = 1e-9) -> list[int]:
+def _policy_steps(solver: DeadbeatSolver, tol: float = 1e-9) -> list[int]:
     steps = []
     u, p = np.asarray(solver.cycle.inputs, float), solver.model.p
     for arc, T in zip(solver.cycle.orbit, solver.cycle.durations, strict=True):
@@ -100,7 +109,7 @@ def _policy_steps(solver: Deadbeat, tol: float = 1e-9) -> list[int]:
 
 
 def compile_policy(
-    solver: Deadbeat,
+    solver: DeadbeatSolver,
     directory: str | os.PathLike | None = None,
     *,
     steps: Sequence[int] | None = None,

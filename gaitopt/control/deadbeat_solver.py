@@ -7,20 +7,15 @@ import os
 import time
 from collections.abc import Sequence
 from functools import cached_property
-from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
 
 from ..result import LimitCycle
 from ..shooting import shooting_problem
+from .codegen import GeneratedPolicy, compile_policy, policy_function
+from .decision import Decision, _fmt_point, _fmt_u
 from .errors import ControlDesignError
-from .linearisation import _fmt_point
-from .policy import Decision, _fmt_u
-
-if TYPE_CHECKING:
-    from .codegen import GeneratedPolicy
-
 
 _NEWTON = {
     "error_on_fail": False,
@@ -270,14 +265,10 @@ class Deadbeat:
     def policy_function(self, steps: Sequence[int] | None = None) -> ca.Function:
         """The deadbeat policy as one CasADi function (see
         :func:`gaitopt.control.codegen.policy_function`)."""
-        from .codegen import policy_function
-
         return policy_function(self, steps)
 
     def codegen(
         self, directory: str | os.PathLike | None = None, *, steps: Sequence[int] | None = None
     ) -> GeneratedPolicy:
         """The policy as compiled C (see :func:`gaitopt.control.codegen.compile_policy`)."""
-        from .codegen import compile_policy
-
         return compile_policy(self, directory, steps=steps)

@@ -11,6 +11,8 @@ import numpy as np
 from ..hybrid import HybridModel
 from ..result import LimitCycle
 from ..shooting import find_limit_cycle
+from .deadbeat_solver import Deadbeat
+from .decision import _fmt_point
 from .errors import ControlDesignError, NoGaitError, check_section_point
 
 
@@ -103,8 +105,6 @@ def linearise(
                 cycle = find_limit_cycle(model, target, inputs=inputs)
             if cycle.success:
                 s_t = model.section_vector(target)
-                from .deadbeat_solver import Deadbeat  # the solver uses this module
-
                 decision = Deadbeat(cycle).solve(s_t, target=s_t)
                 if not decision.success:
                     raise NoGaitError(
@@ -123,9 +123,3 @@ def _require_inputs(model: HybridModel) -> None:
             f"{model.name} has no per-step input (it is passive): nothing to control; models "
             f"with inputs: slip (touchdown_angle), compass_gait (hip_torque)"
         )
-
-
-def _fmt_point(model: HybridModel, s: np.ndarray) -> str:
-    return ", ".join(
-        f"{k}={v:.6g}" for k, v in zip(model.section.coordinates, np.ravel(s), strict=True)
-    )

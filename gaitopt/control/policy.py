@@ -5,54 +5,20 @@ from __future__ import annotations
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
 from ..result import LimitCycle
+from .deadbeat_solver import Deadbeat
+from .decision import Decision, _fmt_point, _fmt_u
 from .errors import check_section_point
-from .linearisation import Linearisation, _fmt_point
-
-if TYPE_CHECKING:
-    from .deadbeat_solver import Deadbeat
+from .linearisation import Linearisation
 
 
 # -- decisions and controllers -----------------------------------------------------------------
-@dataclass
-class Decision:
-    """One step's input, chosen at a return to the section.
-
-    Attributes
-    ----------
-    success : bool
-        The controller's law was applied as designed (deadbeat: the equation was solved, the
-        solution is a valid step and the input within its limits; LQR/acker: not saturated).
-    message : str
-        What was decided, or why the law could not be applied and what was done instead.
-    input : numpy.ndarray
-        The input applied (after limits / fallback).
-    state : numpy.ndarray
-        Section coordinates the decision was made from.
-    predicted : numpy.ndarray
-        Predicted next section coordinates: the target (deadbeat), ``s* + (A − BK)(s − s*)``
-        (linear laws).
-    iterations : int
-        Newton iterations (deadbeat).
-    solve_time : float
-        Seconds spent deciding.
-    """
-
-    success: bool
-    message: str
-    input: np.ndarray
-    state: np.ndarray
-    predicted: np.ndarray
-    iterations: int = 0
-    solve_time: float = float("nan")
-
-
 @dataclass
 class StepController:
     """A step-to-step controller designed around a gait; also a policy for :func:`simulate`.
@@ -220,10 +186,6 @@ class StepController:
 
 def _pairs(z: np.ndarray) -> list[list[float]]:
     return [[float(v.real), float(v.imag)] for v in np.asarray(z, dtype=complex)]
-
-
-def _fmt_u(model: HybridModel, u: np.ndarray) -> str:
-    return ", ".join(f"{k}={v:.6g}" for k, v in zip(model.inputs, np.ravel(u), strict=True))
 
 
 def _limits(
