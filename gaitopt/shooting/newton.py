@@ -5,16 +5,33 @@ has none) and IPOPT (``nlpsol``) with positive durations and an optional objecti
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import casadi as ca
 import numpy as np
 
 from ..errors import GaitoptInputError
-from .problem import ShootingProblem
 from .symbolic import NEWTON_OPTIONS
 
 __all__ = ["METHODS", "Solution", "newton", "solve"]
+
+
+class ShootingSystem(Protocol):
+    """What the methods use of a :class:`~gaitopt.shooting.problem.ShootingProblem`: that module
+    sits above this one (its :meth:`~gaitopt.shooting.problem.ShootingProblem.solve` calls
+    :func:`solve`), so the methods name the problem by the members they need."""
+
+    size: int
+    model_cls: Any
+    newton: ca.Function
+    newton_line_search: ca.Function
+
+    def assembly(self) -> Any: ...
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def ipopt_solver(self, objective: Any, free_inputs: bool) -> ca.Function: ...
+
 
 #: The methods :meth:`ShootingProblem.solve` offers.
 METHODS = ("newton", "ipopt")
@@ -33,7 +50,7 @@ class Solution:
     evaluation: Any = None
 
 
-def solve(problem: ShootingProblem, w0, u, p, *, method="newton", objective=None,
+def solve(problem: ShootingSystem, w0, u, p, *, method="newton", objective=None,
           free_inputs=False) -> Solution:  # fmt: skip
     """Newton (plain, then with line search), or IPOPT with the problem's bounds and an
     optional objective (see :meth:`ShootingProblem.ipopt_solver`)."""
@@ -79,7 +96,7 @@ def solve(problem: ShootingProblem, w0, u, p, *, method="newton", objective=None
 _ABSTOL, _ABSTOL_STEP = NEWTON_OPTIONS["abstol"], NEWTON_OPTIONS["abstolStep"]
 
 
-def newton(problem: ShootingProblem, w0, u, p, *, line_search: bool = False):
+def newton(problem: ShootingSystem, w0, u, p, *, line_search: bool = False):
     """Newton on the compiled shooting system: each iteration one compiled call for ``F`` and
     ``∂F/∂w``, a dense solve, and (with ``line_search``) halving the step until ``‖F‖₂``
     decreases.  Stops where ``max |F| ≤ 1e-12`` or ``max |step| ≤ 1e-15``; 30 iterations

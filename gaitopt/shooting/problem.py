@@ -27,6 +27,7 @@ import numpy as np
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
 from ..result import OrbitArc
+from .newton import solve as _solve
 from .symbolic import SymbolicShooting
 
 __all__ = ["MultipleShooting", "ShootingProblem", "shooting_problem"]
@@ -221,9 +222,7 @@ class ShootingProblem(SymbolicShooting):
             ``w``, ``u`` (the inputs: optimised with ``free_inputs``), ``converged``,
             ``iterations`` and the :meth:`evaluate` result at ``w`` where Newton has it.
         """
-        from .newton import solve
-
-        return solve(self, w0, u, p, method=method, objective=objective, free_inputs=free_inputs)
+        return _solve(self, w0, u, p, method=method, objective=objective, free_inputs=free_inputs)
 
     # -- the map between unknowns, phases and orbits ------------------------------------------
     def pack(self, s: np.ndarray, nodes: list[np.ndarray], durations: list[float]) -> np.ndarray:
