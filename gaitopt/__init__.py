@@ -11,6 +11,7 @@ from __future__ import annotations
 
 # The function `continuation` shares its name with its module: imported eagerly, since a lazy
 # name would be shadowed by the submodule once anything imports it.
+from .basin import Basin, basin, basin_fraction, basin_slice
 from .continuation import Branch, PseudoArclength, SpecialPoint, continuation
 from .errors import (
     FrozenModelError,
@@ -44,6 +45,10 @@ __all__ = [
     "LimitCycle",
     "OrbitArc",
     "simulate",
+    "basin",
+    "basin_slice",
+    "basin_fraction",
+    "Basin",
     "orbital_distance",
     "optimize_gait",
     "OptimalGait",

@@ -13,6 +13,8 @@
     gaitopt continue MODEL --param NAME --to VALUE [--set ...] [--guess ...] [--steps K]
                            [--both] [--no-cascade] [--max-period K] [--step H] [--min-step H]
                            [--max-step H] [--max-points N] [--bounds LOW:HIGH] [--out DIR] [--json]
+    gaitopt basin MODEL [--set ...] [--guess ...] [--rays N] [--steps N] [--samples N]
+                        [--max-radius R] [--scheduler ADDRESS] [--json] [--out DIR]
 
 Exit status (docs/design.md, public contract): 0 gait found / simulation completed; 1 no gait found
 (the JSON is still printed, with ``success: false``) or the simulation did not complete; 2 bad
@@ -38,7 +40,7 @@ import warnings
 from collections.abc import Sequence
 
 from ..errors import GaitoptInputError
-from . import continue_, control, linkage, list_, optimize, simulate, solve
+from . import basin, continue_, control, linkage, list_, optimize, simulate, solve
 from .common import (
     EXIT_BAD_INPUT,
     EXIT_INTERRUPTED,
@@ -95,6 +97,7 @@ SUBCOMMANDS: dict[str, Subcommand] = {
     ),
     "linkage": Subcommand(linkage.HELP, linkage.add_arguments, linkage.run),
     "optimize": Subcommand(optimize.HELP, optimize.add_arguments, optimize.run),
+    "basin": Subcommand(basin.HELP, basin.add_arguments, basin.run),
 }
 
 
