@@ -28,7 +28,7 @@ def test_a_transcription_is_shared_only_by_the_same_statement():
 
 def test_statements_differing_only_in_a_fixed_speed_share_one_nlp():
     # The speed is the bound of its row (distance / period), like the period and step length.
-    from gaitopt.optimize.solve import _solver
+    from gaitopt.optimize.attempt import _solver
 
     model = gaitopt.model("compass_gait", slope=0.0)
     mesh = RadauMesh(4, 3)

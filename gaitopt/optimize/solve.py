@@ -12,23 +12,29 @@ with ``success=False`` naming the constraint that cannot be met.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import fields, replace
+from collections.abc import Callable, Sequence
+from dataclasses import replace
 from typing import Any
 
-import casadi as ca
 import numpy as np
 
 from ..arguments import check_count, check_positive, check_scheduler
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
-from .active import _active, _violation
+from .active import _active
 from .arcs import _describe, describe_bounds, detect_bound_arcs, detect_structure, structure_of
+from .attempt import (
+    _collocation,
+    _converged,
+    _run,
+    attempt,
+)
 from .certify import _certify
-from .collocation import Arc, Collocation, RadauMesh
-from .guess import NoStart, _start_guess, check_warm_start
+from .collocation import Collocation, RadauMesh
+from .guess import check_warm_start
 from .problem import _WHY_STEPS, MAX_STEPS, GaitProblem, as_problem
 from .result import Minimum, OptimalGait, StartRecord
+from .starts import dask_starts
 
 __all__ = [
     "optimize_gait",
@@ -55,29 +61,6 @@ MAX_MESH_INTERVALS = 24
 #: Highest Radau degree of a ``mesh`` (the default is 6; beyond about 10 the collocation's
 #: Lagrange bases lose accuracy in double precision).
 MAX_MESH_DEGREE = 10
-_IPOPT = {
-    "ipopt.print_level": 0,
-    "ipopt.sb": "yes",
-    "print_time": False,
-    "ipopt.tol": 1e-11,
-    "ipopt.constr_viol_tol": 1e-11,
-    "ipopt.acceptable_tol": 1e-9,
-    "ipopt.max_iter": 1000,
-    # Adaptive barrier parameter (Nocedal, Wächter & Waltz 2009, "Adaptive barrier update
-    # strategies for nonlinear interior methods"): on the five-link biped every one of 8
-    # starts converges, in 28–68 iterations, where the monotone rule needs 27–206 and loses 3.
-    "ipopt.mu_strategy": "adaptive",
-    "error_on_fail": False,
-    "expand": True,
-    # A trial point where a function is undefined (the five-link biped's section lift takes an
-    # arccos) is IPOPT's to reject and back off from; CasADi need not print each one.
-    "show_eval_warnings": False,
-}
-#: Transcriptions kept with their compiled NLPs, by statement and mesh (least recently used
-#: dropped first): each holds a compiled NLP of a few MB.
-_COLLOCATIONS: dict[tuple, Collocation] = {}
-_SOLVERS: dict[tuple, ca.Function] = {}
-_CACHED_TRANSCRIPTIONS = 4
 _MAX_REFINEMENTS = 3
 
 
@@ -152,7 +135,7 @@ def optimize_gait(
         the same model and steps (a certified optimum, or a converged one its checks rejected).
     scheduler : str, optional
         Run the starts on Dask (``"local"``: a local cluster; or a scheduler address), as
-        :func:`gaitopt.sweep.sweep` does (:func:`gaitopt.optimize.library.dask_starts`); the
+        :func:`gaitopt.sweep.sweep` does (:func:`gaitopt.optimize.starts.dask_starts`); the
         minima and the refined optimum are those of the serial run.  Default: serially.
 
     Returns
@@ -253,112 +236,10 @@ def _start_indices(starts: int | Sequence[int]) -> list[int]:
     return indices
 
 
-def _statement_key(problem: GaitProblem, values: bool = True) -> tuple:
-    """Everything a transcription depends on: each field of the statement (the model by class
-    and parameter values; a user's cost function by identity, so a new one never hits).  With
-    ``values=False``, only whether the period, step length and speed are fixed, not their
-    values: they are bounds of the NLP's rows, so such statements share a compiled NLP."""
-    items = []
-    for f in fields(problem):
-        value = getattr(problem, f.name)
-        if f.name == "model":
-            value = (type(value), tuple(value.params.items()))
-        elif not values and f.name in ("period", "step_length", "speed"):
-            value = value is not None
-        elif callable(value):
-            value = ("callable", id(value))
-        elif isinstance(value, Mapping):
-            value = tuple(sorted((k, repr(v)) for k, v in value.items()))
-        items.append((f.name, value))
-    return tuple(items)
-
-
-def _collocation(
-    problem: GaitProblem, mesh: RadauMesh, structure: list[list[Arc]] | None = None
-) -> Collocation:
-    """The transcription of a statement on a mesh, from a small cache: a repeated solve of the
-    same statement (a second call, the points a library revisits) reuses the transcription and
-    its compiled NLP (``nlpsol`` takes about 0.25 s to build for the compass gait)."""
-    key = (_statement_key(problem), mesh, repr(structure))
-    col = _COLLOCATIONS.pop(key, None)
-    if col is None:
-        col = Collocation(problem, mesh, structure)
-    _COLLOCATIONS[key] = col  # most recently used last
-    while len(_COLLOCATIONS) > _CACHED_TRANSCRIPTIONS:
-        _COLLOCATIONS.pop(next(iter(_COLLOCATIONS)))
-    return col
-
-
-def _solver(col: Collocation) -> ca.Function:
-    """IPOPT on the transcription's NLP, built once per NLP structure: transcriptions of
-    statements that differ only in the fixed period, step length or speed share it (their values are
-    the bounds ``lbg = ubg`` of their rows, passed with each solve)."""
-    key = (_statement_key(col.problem, values=False), col.mesh, repr(col.structure))
-    solver = _SOLVERS.pop(key, None)
-    if solver is None:
-        solver = ca.nlpsol("gait", "ipopt", col.nlp, _IPOPT)
-    _SOLVERS[key] = solver  # most recently used last
-    while len(_SOLVERS) > _CACHED_TRANSCRIPTIONS:
-        _SOLVERS.pop(next(iter(_SOLVERS)))
-    return solver
-
-
-def _run(col: Collocation, w0: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, dict[str, Any]]:
-    solver = _solver(col)
-    w0 = np.clip(w0, col.lbx, col.ubx)
-    sol = solver(x0=w0, p=p, lbx=col.lbx, ubx=col.ubx, lbg=col.lbg, ubg=col.ubg)
-    return np.asarray(sol["x"], dtype=float).ravel(), dict(solver.stats())
-
-
 def _same(a: dict[str, Any], b: dict[str, Any]) -> bool:
     cost_close = abs(a["cost"] - b["cost"]) <= 1e-6 * max(abs(a["cost"]), abs(b["cost"])) + 1e-9
     s_close = np.max(np.abs(a["s"] - b["s"])) <= 1e-4 * (1 + np.max(np.abs(a["s"])))
     return bool(cost_close and s_close)
-
-
-def _converged(stats: dict[str, Any]) -> bool:
-    return bool(stats.get("success")) or stats.get("return_status") == "Solved_To_Acceptable_Level"
-
-
-def attempt(
-    col: Collocation, problem: GaitProblem, start: int, seed: int, guess: OptimalGait | None
-) -> dict[str, Any]:
-    """One start of the multi-start on the initial mesh: ``{"start", "w", "stats", "ok",
-    "status", "reason"}`` and ``cost``, ``s``, ``period`` if IPOPT converged, else
-    ``violation`` (worst group, size).
-
-    A start that cannot begin (:class:`~gaitopt.optimize.guess.NoStart`: its perturbed section
-    point is not a state of the model) is returned as such, ``status`` ``"no_start"``, with
-    ``w`` all NaN and no violation, never raised: one start does not end a multi-start.
-    """
-    p = problem.model.p
-    try:
-        w0 = _start_guess(col, problem, start, seed, guess)
-    except NoStart as exc:
-        return {
-            "start": start,
-            "w": np.full(np.size(col.lbx), np.nan),
-            "stats": {},
-            "ok": False,
-            "status": "no_start",
-            "reason": f"start {start} could not begin: {exc}",
-            "violation": ("no start", float("inf")),
-        }
-    w, stats = _run(col, w0, p)
-    ok = bool(_converged(stats) and np.all(np.isfinite(w)))
-    entry: dict[str, Any] = {"start": start, "w": w, "stats": stats, "ok": ok}
-    if ok:
-        sol = col.unpack(w, p)
-        entry.update(cost=sol["cost"], s=sol["s"], period=sol["period"], status="converged")
-        entry["reason"] = f"start {start} converged (cost {sol['cost']:.10g} on the starts' mesh)"
-    else:
-        name, size = entry["violation"] = _violation(col, w, p)
-        entry["status"] = "not_converged"
-        entry["reason"] = (
-            f"start {start} did not converge: IPOPT stopped ({stats.get('return_status')}) with "
-            f"the constraint '{name}' violated by {size:.3g}"
-        )
-    return entry
 
 
 def _start_records(runs: list[dict[str, Any]], minima: list[dict[str, Any]]) -> list[StartRecord]:
@@ -415,8 +296,6 @@ def solve_problem(
     seed = int(seed)
     col = _collocation(problem, mesh)
     if scheduler is not None:  # the same attempts, on Dask workers
-        from .library import dask_starts
-
         runs = dask_starts(problem, mesh, indices, seed, scheduler, guess)
     else:
         runs = [attempt(col, problem, start, seed, guess) for start in indices]

@@ -10,6 +10,8 @@ import numpy as np
 
 from ...errors import GaitoptInputError
 from ...hybrid import HybridModel
+from ...sweep import sweep
+from ..problem import as_problem
 from .records import CONSTRAINTS, ColdCheck, GaitLibrary
 from .workers import cold_solve, cold_task, problem_data
 
@@ -53,8 +55,6 @@ def cold_checks(
 ) -> list[ColdCheck]:
     """One :class:`ColdCheck` per value: the problem there solved cold (on Dask when
     ``scheduler`` is given), its cost against the library's nearest point."""
-    from ..problem import as_problem
-
     if not values:
         return []
     by_value = {pt.value: pt for pt in library.points}
@@ -68,8 +68,6 @@ def cold_checks(
             )
     tol = float(options["tol"])
     if scheduler is not None:
-        from ...sweep import sweep
-
         points = [{"problem": problem_data(p), "tol": tol} for p in problems]
         outcomes = sweep(cold_task, points, scheduler=scheduler, progress=False).results
     else:

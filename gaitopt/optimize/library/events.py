@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from ..attempt import _solver
 from ..collocation import Collocation
 from ..result import OptimalGait
 from .records import LibraryEvent, LibraryPoint
@@ -33,7 +34,6 @@ def reduced_hessian(col: Collocation, w: np.ndarray, p: np.ndarray) -> tuple[flo
         ``(λ_min, λ_max)`` (cost units per decision-variable unit squared); ``(nan, nan)`` if
         the active constraints leave no freedom.
     """
-    from ..solve import _solver
 
     w = np.asarray(w, dtype=float).ravel()
     solver = _solver(col)  # IPOPT's own derivative functions (cached with the last solve)

@@ -12,6 +12,7 @@ import numpy as np
 from ...errors import GaitoptInputError, did_you_mean
 from ...hybrid import HybridModel
 from ..result import OptimalGait
+from ..solve import optimize_gait
 from .cold import cold_checks as _cold_checks
 from .cold import cold_values as _cold_values
 from .events import compare, reduced_hessian
@@ -97,8 +98,6 @@ def gait_library(
     -------
     GaitLibrary
     """
-    from ..solve import optimize_gait
-
     t_start = time.perf_counter()
     fixed = {"period": period, "step_length": step_length, "speed": speed}
     _check_vary(model, vary, fixed)
