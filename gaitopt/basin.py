@@ -131,8 +131,8 @@ class Basin:
         centre = np.array([self.fixed_point[c] for c in self.coordinates])
         z = (np.atleast_2d(np.asarray(points, dtype=float)) - centre) / self.scale
         if z.shape[1] == 1:
-            up = self.radii[self.directions[:, 0] > 0].min(initial=0.0)
-            down = self.radii[self.directions[:, 0] < 0].min(initial=0.0)
+            up, down = (self.radii[sign * self.directions[:, 0] > 0] for sign in (1, -1))
+            up, down = (r.min() if r.size else 0.0 for r in (up, down))
             return (z[:, 0] <= up) & (z[:, 0] >= -down)
         if z.shape[1] != 2:
             raise GaitoptInputError(
