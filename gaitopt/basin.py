@@ -39,7 +39,15 @@ import numpy as np
 from .arguments import check_count, check_positive, check_scheduler
 from .errors import GaitoptInputError
 
-__all__ = ["basin", "basin_slice", "basin_fraction", "Basin", "BasinSlice", "BasinFraction"]
+__all__ = [
+    "basin",
+    "basin_slice",
+    "basin_fraction",
+    "classify_starts",
+    "Basin",
+    "BasinSlice",
+    "BasinFraction",
+]
 
 #: Most rays, grid points per axis and samples: each is at least one simulation of
 #: ``steps + hold`` periods.
@@ -686,6 +694,45 @@ def _outcomes(setup: _Setup, starts: np.ndarray, chunk: int, scheduler: str | No
         setup.point(starts=starts[i : i + chunk].tolist()) for i in range(0, len(starts), chunk)
     ]
     return [o for r in _run(_starts_task, points, scheduler) for o in r["outcomes"]]
+
+
+def classify_starts(
+    gait: Any,
+    starts: Any,
+    *,
+    steps: int = 40,
+    hold: int = 5,
+    tol: float = 1e-4,
+    scale: Any = None,
+    chunk: int = 20,
+    scheduler: str | None = None,
+) -> list[str]:
+    """Simulate each start and say whether it converges to the gait: ``"converged"`` or why not
+    (``"fell"``, ``"standing"``, ``"timeout"``, ``"not converged"``, ``"invalid start"``).
+
+    Parameters
+    ----------
+    gait : LimitCycle
+        A successful gait.
+    starts : array_like
+        Rows of section coordinates (every coordinate, in the section's order; their units).
+    steps, hold, tol, scale, chunk, scheduler
+        As in :func:`basin_fraction`.
+
+    Returns
+    -------
+    list of str
+    """
+    setup = _setup(gait, steps, hold, tol, scale)
+    chunk = check_count("chunk", chunk, 1, MAX_SAMPLES, _LIMIT)
+    check_scheduler(scheduler, serial=True)
+    starts = np.atleast_2d(np.asarray(starts, dtype=float))
+    if starts.shape[1] != len(setup.coordinates) or not np.all(np.isfinite(starts)):
+        raise GaitoptInputError(
+            f"`starts` must be finite rows of {len(setup.coordinates)} section coordinates "
+            f"({', '.join(setup.coordinates)}), got shape {starts.shape}"
+        )
+    return _outcomes(setup, starts, chunk, scheduler)
 
 
 def basin_slice(
