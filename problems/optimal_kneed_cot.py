@@ -11,10 +11,12 @@ actuator work ∫max(0, τω) dt over a step divided by M·g·L — is found wit
 held-hip arcs) as a library across speed, built so that no single start decides a point:
 
 * ``cold``: the model's default start (no warm start), at every speed;
-* ``from above``: continuation down in speed from the fastest certified speed, each speed warm
-  started from the lowest certified attempt at its faster neighbour (or at the nearest faster
-  speed that has one; the JSON and CSV name each seed);
-* ``from below``: continuation up in speed likewise, from the slowest certified speed.
+* ``from above``: continuation down in speed from the fastest speed with a seed, each speed
+  warm started from the lowest certified attempt at its faster neighbour — or, where none is
+  certified, the lowest converged one that its checks rejected (an orbit is a start like any
+  other; what it leads to is certified on its own) — or from the nearest faster speed that has
+  one (the JSON and CSV name each seed, "(rejected)" for an uncertified one);
+* ``from below``: continuation up in speed likewise, from the slowest speed with a seed.
 
 The two chains alternate (from above first) and are repeated while a pass finds a lower
 optimum at a seed speed (later passes re-solve only the speeds whose seed improved; labels
@@ -82,6 +84,17 @@ def lowest(attempts: list[dict]) -> int | None:
     return min(good, key=lambda i: attempts[i]["cost"]) if good else None
 
 
+def seed_of(attempts: list[dict]) -> int | None:
+    """Index of the attempt a chain continues from: the lowest certified one, else the lowest
+    one that converged but whose checks rejected it (its orbit is a start like any other; what
+    it leads to is certified on its own), else None."""
+    i = lowest(attempts)
+    if i is not None:
+        return i
+    near = [i for i, a in enumerate(attempts) if a["converged_cost"] is not None]
+    return min(near, key=lambda i: attempts[i]["converged_cost"]) if near else None
+
+
 def disagreement(attempts: list[dict]) -> str:
     """Empty where the certified attempts agree to :data:`SAME` (or fewer than two are
     certified); else every certified attempt's cost, lowest first, e.g.
@@ -100,11 +113,16 @@ def _solve(v: float, label: str, seed: tuple[float, int] | None, points: dict) -
     gait = solve_problem(problem_at(v), guess=guess)
     elapsed = time.perf_counter() - t0
     ok = bool(gait.success)
-    seed_text = f"{seed[0]:.2f} {points[seed[0]][seed[1]]['start']}" if seed else None
+    seed_text = None
+    if seed:
+        used = points[seed[0]][seed[1]]
+        seed_text = f"{seed[0]:.2f} {used['start']}" + ("" if used["success"] else " (rejected)")
+    converged = bool(gait.orbit) and gait.cost is not None and np.isfinite(gait.cost)
     points[v].append({
         "start": label,
         "success": ok,
         "cost": float(gait.cost) if ok else None,
+        "converged_cost": float(gait.cost) if converged else None,
         "seed": seed_text,
         "time_s": round(elapsed, 1),
         "message": gait.message or "(the solver gave no reason)",
@@ -121,20 +139,20 @@ def _solve(v: float, label: str, seed: tuple[float, int] | None, points: dict) -
 
 def chain_pass(speeds: list[float], direction: str, points: dict, used: dict) -> int:
     """One pass of the continuation ``direction`` ("from below": up in speed; "from above":
-    down): each speed warm started from the lowest certified attempt at its neighbour behind it
-    (or at the nearest speed behind with one), unless this chain already started it from a seed
-    as low (to :data:`SAME`): the same minimum again; returns the number of solves."""
+    down): each speed warm started from :func:`seed_of` its neighbour behind it (or of the
+    nearest speed behind that has one), unless this chain already started it from that speed at
+    the same cost (to :data:`SAME`): the same minimum again; returns the number of solves."""
     order = speeds if direction == "from below" else speeds[::-1]
     seed_speed, solves = None, 0
     for j, v in enumerate(order):
-        if j and lowest(points[order[j - 1]]) is not None:
+        if j and seed_of(points[order[j - 1]]) is not None:
             seed_speed = order[j - 1]
         if seed_speed is None:
             continue
-        seed = (seed_speed, lowest(points[seed_speed]))
-        cost = points[seed_speed][seed[1]]["cost"]
+        seed = (seed_speed, seed_of(points[seed_speed]))
+        cost = points[seed_speed][seed[1]]["converged_cost"]
         last = used.get((direction, v))
-        if last is not None and last[0] == seed_speed and cost >= last[1] * (1 - SAME):
+        if last is not None and last[0] == seed_speed and abs(cost / last[1] - 1) <= SAME:
             continue
         used[direction, v] = (seed_speed, cost)
         n = sum(a["start"].startswith(direction) for a in points[v])

@@ -383,8 +383,9 @@ def test_kneed_cot_reports_the_lowest_certified_attempt_and_flags_different_mini
     # different local minima and are flagged with every certified cost; 1e-9 apart is one minimum.
     study = _module("optimal_kneed_cot")
 
-    def attempt(start, cost):
-        return {"start": start, "success": cost is not None, "cost": cost}
+    def attempt(start, cost, rejected=None):
+        return {"start": start, "success": cost is not None, "cost": cost,
+                "converged_cost": rejected if cost is None else cost}  # fmt: skip
 
     jump = [attempt("cold", None), attempt("from above", 0.0433), attempt("from below", 0.0194)]
     assert study.lowest(jump) == 2
@@ -394,6 +395,12 @@ def test_kneed_cot_reports_the_lowest_certified_attempt_and_flags_different_mini
     assert study.disagreement(same) == ""
     assert study.lowest([attempt("cold", None), attempt("from above", None)]) is None
     assert study.disagreement([attempt("cold", 0.03), attempt("from above", None)]) == ""
+    # A chain continues from the lowest certified attempt, else from the lowest converged one
+    # its checks rejected (a start, not a result), else from nowhere.
+    rejected = [attempt("cold", None, 0.0075), attempt("from above", None, 0.0074)]
+    assert study.lowest(rejected) is None and study.seed_of(rejected) == 1
+    assert study.seed_of([attempt("cold", None, 0.001), attempt("from above", 0.03)]) == 1
+    assert study.seed_of([attempt("cold", None), attempt("from below", None)]) is None
 
 
 def test_kneed_cot_fast_mode_keeps_the_lowest_certified_optimum(tmp_path):
@@ -430,6 +437,36 @@ def test_kneed_cot_fast_mode_keeps_the_lowest_certified_optimum(tmp_path):
     assert len(csv_rows) == 3
 
 
+def test_readme_kneed_cot_table_is_the_committed_study_output():
+    """Every row of the README's kneed-walker cost-of-transport table is the committed study
+    table (results/optimal_kneed_cot/cot.csv, written by the full run) at the digits the README
+    prints: the least cost, the start it came from, period, discretisation error and largest
+    |μ| of each certified speed, the flag and every certified cost where the starts reached
+    different local minima, and a reason where no start is certified."""
+    rows = _readme_table("| speed v (m/s) | least cost of transport")
+    committed = _committed("optimal_kneed_cot/cot.csv", "speed_m_per_s")
+    assert len(rows) == len(committed) == 8
+    for speed, cost, start, period, error, mu, minima in rows:
+        row = committed[float(speed)]
+        if cost.startswith("—"):
+            assert row["success"] == "False" and row["failed_starts"], speed
+            assert len(cost) > 4 and not any((start, period, error, mu, minima)), speed
+            continue
+        assert row["success"] == row["verified"] == "True", speed
+        assert _as_printed(cost, float(row["cost_of_transport"])), speed
+        assert start == row["start"], speed
+        assert _as_printed(period, float(row["period_s"])), speed
+        assert _as_printed(error, float(row["discretisation_error"])), speed
+        assert _as_printed(mu, float(row["max_abs_multiplier"])), speed
+        assert (minima != "—") == (row["different_minima"] == "True"), speed
+        if minima != "—":
+            printed = [part.rsplit(" ", 1) for part in minima.split(" < ")]
+            recorded = [part.rsplit(" ", 1) for part in row["minima"].split(" < ")]
+            assert [k for k, _ in printed] == [k for k, _ in recorded], speed
+            for (_, text), (_, value) in zip(printed, recorded, strict=True):
+                assert _as_printed(text, float(value)), speed
+
+
 def test_compass_gait_basin_study_confirms_the_ray_estimate_on_the_grid(tmp_path):
     """problems/compass_gait_basin.py --fast: every point of the 11×11 brute-force slice that the
     ray estimate claims converges on the grid (a boolean per simulated start, no tolerance); the
@@ -453,3 +490,45 @@ def test_compass_gait_basin_study_confirms_the_ray_estimate_on_the_grid(tmp_path
     rows = (folder / "slice.csv").read_text(encoding="utf-8").splitlines()
     assert len(rows) == 1 + 121
     assert (folder / "basin_slice.png").stat().st_size > 0
+
+
+def test_kneed_cot_chains_from_both_ends_reach_the_minimum_the_cold_starts_miss(monkeypatch):
+    # The library's walk with a stand-in solver shaped like the full run: cold starts fail at
+    # 0.72-0.80 m/s and are rejected at 0.68 (converged, lower branch); from 0.84's optimum
+    # (branch A) a warm start finds branch A at 0.80 and nothing below; from the lower branch a
+    # warm start finds it at 0.72-0.80.  The chain from above alone would report A at 0.80;
+    # the chain from below, seeded by the rejected 0.68 orbit, finds the lower branch there, the
+    # point is flagged with both costs, the second pass from above carries the lower branch
+    # down, and the walk stops once no seed changes.
+    study = _module("optimal_kneed_cot")
+
+    class Gait:
+        def __init__(self, branch, v, ok):
+            self.branch, self.success = branch, ok
+            self.cost = (0.01 if branch == "low" else 0.05) * v if branch else None
+            self.orbit = [1] if branch else []
+            self.message = "" if ok else ("rejected" if branch else "infeasible")
+            self.discretisation_error = 1e-9
+
+    def solve(problem, guess=None):
+        v = round(problem.speed, 2)
+        if guess is None:
+            return Gait({0.68: "low", 0.84: "A"}.get(v), v, v == 0.84)
+        if guess.branch == "low" and v < 0.84:
+            return Gait("low", v, v > 0.68)
+        return Gait("A" if v >= 0.80 else None, v, v >= 0.80)
+
+    monkeypatch.setattr(study, "solve_problem", solve)
+    points = study.library([0.68, 0.72, 0.76, 0.8, 0.84])
+    at80 = points[0.8]
+    assert [a["start"] for a in at80] == ["cold", "from above", "from below"]
+    assert at80[1]["cost"] == pytest.approx(0.04) and at80[2]["cost"] == pytest.approx(0.008)
+    assert at80[2]["seed"] == "0.76 from below"
+    assert at80[study.lowest(at80)]["start"] == "from below"
+    assert study.disagreement(at80) == "from below 0.008 < from above 0.04"
+    assert points[0.72][1]["seed"] == "0.80 from above" and not points[0.72][1]["success"]
+    assert points[0.72][2]["seed"] == "0.68 cold (rejected)" and points[0.72][2]["success"]
+    assert points[0.76][-1]["start"] == "from above, pass 2" and points[0.76][-1]["success"]
+    assert points[0.68][-1]["start"] == "from above, pass 2"
+    assert all(study.lowest(points[v]) is None for v in [0.68])
+    assert sum(len(a) for a in points.values()) == 5 + 4 + 4 + 3
