@@ -15,6 +15,7 @@ from .kneed_walker import KneedWalker
 from .line_juggler import LineJuggler
 from .one_d_hopper import OneDHopper
 from .planar_juggler import PlanarJuggler
+from .planar_quadruped import PlanarQuadruped, PlanarQuadrupedPronk
 from .raibert_hopper import RaibertHopper
 from .rimless_wheel import RimlessWheel
 from .simplest_walker import SimplestWalker
@@ -44,6 +45,8 @@ __all__ = [
     "OneDHopper",
     "FiveLinkBiped",
     "PlanarJuggler",
+    "PlanarQuadruped",
+    "PlanarQuadrupedPronk",
     "BallisticWalker",
     "RaibertHopper",
     "RimlessWheel",
@@ -74,6 +77,8 @@ REGISTRY: dict[str, type[HybridModel]] = {
         BallisticWalker,
         Strandbeest,
         ThreeLinkWalker,
+        PlanarQuadruped,
+        PlanarQuadrupedPronk,
     )
 }
 
