@@ -124,12 +124,22 @@ class Basin:
         centre = np.array([self.fixed_point[c] for c in self.coordinates])
         return centre + self.radii[:, None] * self.directions * self.scale
 
-    def claims(self, points: np.ndarray) -> np.ndarray:
+    def claims(self, points: np.ndarray, *, next_to_flags: bool = False) -> np.ndarray:
         """Which points (rows, in ``coordinates``, their units) the estimate claims converge.
 
         One coordinate: between the two rays' ends.  Two: within the smaller radius of the two
         rays whose angles enclose the point's angle (a conservative sector between adjacent
-        rays).  Both rest on the star-shaped assumption.
+        rays), except next to a flagged (non-monotone) ray, where the basin is known not to be
+        star-shaped: nothing is claimed there unless ``next_to_flags``.  Both rest on the
+        star-shaped assumption, and in two coordinates on the basin filling the sector between
+        two rays, which is not simulated.
+
+        Parameters
+        ----------
+        points : numpy.ndarray
+            Rows of the coordinates ``coordinates`` (their units).
+        next_to_flags : bool
+            Claim the sectors next to flagged rays too (as if the basin were star-shaped there).
 
         Raises
         ------
@@ -149,7 +159,10 @@ class Basin:
             )
         angles = np.arctan2(self.directions[:, 1], self.directions[:, 0]) % (2 * np.pi)
         order = np.argsort(angles)
-        angles, radii = angles[order], self.radii[order]
+        radii = self.radii.copy()
+        if not next_to_flags:
+            radii[[flag["ray"] for flag in self.flags]] = 0.0
+        angles, radii = angles[order], radii[order]
         phi = np.arctan2(z[:, 1], z[:, 0]) % (2 * np.pi)
         after = np.searchsorted(angles, phi) % len(angles)
         before = (after - 1) % len(angles)
