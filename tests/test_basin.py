@@ -219,3 +219,59 @@ def test_cli_bad_counts_before_any_work(capsys, argv):
     assert main(["basin", "compass_gait", *argv]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("gaitopt: error: basin: argument") and "\n" not in err
+
+
+def test_chunks_and_scheduler_reach_the_sweep(wheel, monkeypatch):
+    """One sweep task per chunk of rays, and ``scheduler=`` handed to gaitopt.sweep.sweep as given
+    (the recorded call is then run serially)."""
+    import gaitopt.sweep as sweep_module
+
+    real, calls = sweep_module.sweep, []
+
+    def recording(task, points, **kwargs):
+        calls.append((task.__name__, len(points), kwargs["scheduler"]))
+        return real(task, points, **{**kwargs, "scheduler": "serial"})
+
+    monkeypatch.setattr(sweep_module, "sweep", recording)
+    estimate = basin(wheel, chunk=1, scan=2, bisections=2, scheduler="tcp://127.0.0.1:8786")
+    assert calls == [("_rays_task", 2, "tcp://127.0.0.1:8786")]
+    assert estimate.success
+    basin(wheel, scan=2, bisections=1)
+    assert calls[-1] == ("_rays_task", 1, "serial")  # default: serial, both rays in one chunk
+
+
+def test_classify_starts_reports_each_outcome(wheel):
+    """The rolling fixed point converges; θ̇⁺ = 0.5 rad/s < ω₁ rocks and stands (closed form,
+    README rimless wheel: the simulator ends in "standing"); a start of the wrong width is one
+    line naming `starts`."""
+    from gaitopt.basin import classify_starts
+
+    omega_star = wheel.model.rolling_speed()
+    assert classify_starts(wheel, [[omega_star], [0.5]]) == ["converged", "standing"]
+    with pytest.raises(gaitopt.GaitoptInputError, match="`starts`"):
+        classify_starts(wheel, [[1.0, 2.0]])
+
+
+def test_claims_skip_the_sectors_next_to_a_flagged_ray(wheel):
+    """Four rays in a plane, radius 1 each, ray 0 (angle 0) flagged: a point at 45° (between rays
+    0 and 1) is claimed only with next_to_flags; one at 135° (rays 1 and 2) always; one beyond
+    every radius never.  Exact geometry, no tolerance."""
+    from gaitopt.basin import Basin
+
+    angles = np.pi / 2 * np.arange(4)
+    estimate = Basin(
+        True,
+        "",
+        wheel.model,
+        ("a", "b"),
+        {"a": 0.0, "b": 0.0},
+        np.ones(2),
+        np.column_stack([np.cos(angles), np.sin(angles)]),
+        np.ones(4),
+        np.full(4, 1.1),
+        np.zeros(4, bool),
+        flags=[{"ray": 0, "first_failure": 1.1, "converges_at": [2.0]}],
+    )
+    points = np.array([[0.5, 0.5], [-0.5, 0.5], [2.0, 2.0]])
+    assert estimate.claims(points).tolist() == [False, True, False]
+    assert estimate.claims(points, next_to_flags=True).tolist() == [True, True, False]
