@@ -20,7 +20,8 @@ import numpy as np
 
 from gaitopt.continuation import PseudoArclength, continuation
 from gaitopt.models import model as make_model
-from gaitopt.sweep import simulate_task, sweep
+from gaitopt.simulation import simulate_task
+from gaitopt.sweep import sweep
 
 __all__ = ["run"]
 

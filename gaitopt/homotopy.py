@@ -74,7 +74,7 @@ def follow_default_gait(model: HybridModel, **options: Any) -> LimitCycle | None
         where along the path the gait was lost and why; ``None`` when the path cannot be taken (an
         integer parameter changed, or no default gait at the default parameters).
     """
-    from .shooting import find_limit_cycle
+    from .shooting.gait import direct_solve
 
     changes = changed_parameters(model)
     specs = {s.name: s for s in type(model).parameter_specs()}
@@ -82,7 +82,7 @@ def follow_default_gait(model: HybridModel, **options: Any) -> LimitCycle | None
         return None
     verify = options.pop("verify", True)
     base = type(model)()
-    cycle = find_limit_cycle(base, None, follow=False, verify=False, **options)
+    cycle = direct_solve(base, None, verify=False, **options)
     if not cycle.success:
         return None
     route = f"followed the default gait from the default parameters ({path_description(changes)})"
@@ -98,8 +98,8 @@ def follow_default_gait(model: HybridModel, **options: Any) -> LimitCycle | None
         last = target == 1.0
         if own_mesh:  # keep the mesh the previous gait needed (refined where the orbit is stiff)
             options["discretisation"] = cycle.discretisation
-        trial = find_limit_cycle(
-            model if last else at(target), cycle, follow=False, verify=verify and last, **options
+        trial = direct_solve(
+            model if last else at(target), cycle, verify=verify and last, **options
         )
         solves += 1
         if trial.success:
@@ -175,7 +175,7 @@ def multi_start(
         ``multipliers`` (``[re, im]``), ``stable``, ``starts`` (how many reached it).
     """
     from .errors import GaitoptInputError
-    from .shooting import find_limit_cycle
+    from .shooting.gait import direct_solve
 
     names = model.section.coordinates
     sample = _sample(model, starts, seed)
@@ -184,7 +184,7 @@ def multi_start(
     if scheduler is None:
         for guess in points:
             try:
-                cycle = find_limit_cycle(model, guess, steps=steps, follow=False, **options)
+                cycle = direct_solve(model, guess, steps=steps, **options)
             except GaitoptInputError:  # a start from which the model never completes a step
                 continue
             if cycle.success:
@@ -197,13 +197,14 @@ def multi_start(
                     }
                 )
     else:
-        from .sweep import solve_task, sweep
+        from .shooting.gait import direct_task
+        from .sweep import sweep
 
         tasks = [
             {"model": model.name, "params": model.params, "guess": g, "steps": steps}
             for g in points
         ]
-        result = sweep(solve_task, tasks, scheduler=scheduler, progress=False)
+        result = sweep(direct_task, tasks, scheduler=scheduler, progress=False)
         found = [
             {k: r[k] for k in ("fixed_point", "period", "multipliers", "stable")}
             for r in result.results
@@ -222,7 +223,7 @@ def multi_start(
 def find_the_gait_meant(model, guess, *, follow, starts, seed, scheduler, **options) -> LimitCycle:
     """The homotopy from the defaults and the multi-start search around
     :func:`~gaitopt.find_limit_cycle`'s direct solve (called by it; see the module docstring)."""
-    from .shooting import find_limit_cycle
+    from .shooting.gait import direct_solve
 
     if not isinstance(starts, int) or isinstance(starts, bool) or not 1 <= starts <= _MAX_STARTS:
         raise GaitoptInputError(
@@ -232,7 +233,7 @@ def find_the_gait_meant(model, guess, *, follow, starts, seed, scheduler, **opti
         raise GaitoptInputError(f"`seed` must be an integer, got {seed!r}; e.g. seed=0")
     start = time.perf_counter()
     steps = options.pop("steps")
-    direct = lambda: find_limit_cycle(model, guess, steps=steps, follow=False, **options)  # noqa: E731
+    direct = lambda: direct_solve(model, guess, steps=steps, **options)  # noqa: E731
     cycle = None
     if guess is None and steps == 1 and follow is not False:
         followed = follow_default_gait(model, **options)
@@ -270,11 +271,10 @@ def find_the_gait_meant(model, guess, *, follow, starts, seed, scheduler, **opti
         )  # fmt: skip
         if not cycle.success and gaits:  # the multi-start found what the default route did not
             best = gaits[0]
-            cycle = find_limit_cycle(
+            cycle = direct_solve(
                 model,
                 {k: best["fixed_point"][k] for k in model.section.coordinates},
                 steps=steps,
-                follow=False,
                 **options,
             )
         count = f"{len(gaits)} distinct gait(s) from {starts} starts (seed {seed})"

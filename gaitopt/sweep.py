@@ -7,9 +7,10 @@ loses nothing; run again with the same journal and it computes only the missing 
 result is ordered by point index whatever order the points finished in, so the output is
 deterministic.
 
-Two tasks cover the studies: :func:`solve_task` (a limit cycle and its multipliers at given
-parameters — stability maps, brute-force branches) and :func:`simulate_task` (many steps from a
-state — orbit diagrams, basins of attraction).
+The sweep knows nothing of models: the tasks live with what they run —
+:func:`gaitopt.shooting.solve_task` (a limit cycle and its multipliers at given parameters —
+stability maps, brute-force branches) and :func:`gaitopt.simulation.simulate_task` (many steps
+from a state — orbit diagrams, basins of attraction).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from .arguments import check_scheduler
 from .errors import GaitoptInputError
 from .files import jsonable
 
-__all__ = ["sweep", "SweepResult", "solve_task", "simulate_task", "grid"]
+__all__ = ["sweep", "SweepResult", "grid"]
 
 Task = Callable[[Mapping[str, Any]], Mapping[str, Any]]
 
@@ -249,44 +250,3 @@ def _progress(total: int, done: int, show: bool, description: str):
 
 def _plain(value: Any) -> Any:
     return value.item() if isinstance(value, np.generic) else value
-
-
-# -- the tasks ---------------------------------------------------------------------------------
-def solve_task(point: Mapping[str, Any]) -> dict[str, Any]:
-    """A limit cycle at ``point``: ``{"model": name, "params": {...}, "guess": {...} | None,
-    "steps": k}`` → success, period, fixed point, multipliers, max |multiplier|, stable."""
-    from .models import model as make_model
-    from .shooting import find_limit_cycle
-
-    try:
-        model = make_model(point["model"], **point.get("params", {}))
-        cycle = find_limit_cycle(model, point.get("guess"), steps=int(point.get("steps", 1)))
-    except GaitoptInputError as error:  # e.g. a guess that leads nowhere at these parameters
-        return {"success": False, "stable": None, "message": str(error)}
-    return {
-        "success": cycle.success,
-        "period": cycle.period if cycle.success else None,
-        "fixed_point": cycle.fixed_point if cycle.success else None,
-        "multipliers": [[z.real, z.imag] for z in cycle.multipliers],
-        "max_abs_multiplier": float(np.max(np.abs(cycle.multipliers))) if cycle.success else None,
-        "stable": cycle.stable,
-        "message": cycle.message,
-    }
-
-
-def simulate_task(point: Mapping[str, Any]) -> dict[str, Any]:
-    """Simulate ``point["steps"]`` steps: ``{"model", "params", "x0": {...}, "steps": N,
-    "record": K}`` → status, steps completed and the last ``K`` section states."""
-    from .models import model as make_model
-    from .simulation import simulate
-
-    model = make_model(point["model"], **point.get("params", {}))
-    sim = simulate(model, point.get("x0"), steps=int(point["steps"]))
-    keep = int(point.get("record", 1))
-    return {
-        "success": sim.success,
-        "status": sim.status,
-        "steps": sim.steps,
-        "states": sim.section_states[-keep:].tolist() if sim.steps else [],
-        "times": np.diff(sim.section_times)[-keep:].tolist() if sim.steps else [],
-    }

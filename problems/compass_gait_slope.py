@@ -29,7 +29,8 @@ import numpy as np  # noqa: E402
 import gaitopt  # noqa: E402
 from gaitopt.files import write_csv, write_json  # noqa: E402
 from gaitopt.plotting import plot_branch, save_figure  # noqa: E402
-from gaitopt.sweep import simulate_task, sweep  # noqa: E402
+from gaitopt.simulation import simulate_task  # noqa: E402
+from gaitopt.sweep import sweep  # noqa: E402
 
 SLOPES = (0.0525, 0.09)  # Drake's default slope to well into the cascade
 

@@ -43,7 +43,9 @@ from scipy.interpolate import CubicSpline  # noqa: E402
 import gaitopt  # noqa: E402
 from gaitopt.files import write_csv, write_json  # noqa: E402
 from gaitopt.plotting import save_figure  # noqa: E402
-from gaitopt.sweep import simulate_task, solve_task, sweep  # noqa: E402
+from gaitopt.shooting import solve_task  # noqa: E402
+from gaitopt.simulation import simulate_task  # noqa: E402
+from gaitopt.sweep import sweep  # noqa: E402
 
 MASS_LEG = 5.0  # kg, Drake's default (the mass ratio is varied through mass_hip)
 SLOPES = (0.005, 0.15)  # rad

@@ -12,7 +12,9 @@ import time
 import pytest
 
 from gaitopt import GaitoptInputError
-from gaitopt.sweep import grid, simulate_task, solve_task, sweep
+from gaitopt.shooting import solve_task
+from gaitopt.simulation import simulate_task
+from gaitopt.sweep import grid, sweep
 
 POINTS = [
     {
@@ -55,7 +57,8 @@ def test_resume_after_a_kill_loses_and_repeats_nothing(tmp_path):
     journal = tmp_path / "sweep.jsonl"
     points = [dict(p, steps=40) for p in POINTS] * 2
     script = (
-        "import json, sys; from gaitopt.sweep import sweep, simulate_task; "
+        "import json, sys; from gaitopt.simulation import simulate_task; "
+        "from gaitopt.sweep import sweep; "
         f"sweep(simulate_task, json.loads(sys.argv[1]), journal={str(journal)!r}, "
         "scheduler='serial', progress=False)"
     )

@@ -8,11 +8,14 @@ The problem and the methods are separate modules:
 * :mod:`~gaitopt.shooting.newton` — Newton and IPOPT on a problem;
 * :mod:`~gaitopt.shooting.certify` — the checks that make a solution a gait, and its multipliers;
 * :mod:`~gaitopt.shooting.verify` — the independent simulation;
-* :mod:`~gaitopt.shooting.find` — :func:`find_limit_cycle`, which puts them together.
+* :mod:`~gaitopt.shooting.gait` — the direct solve from a guess (:func:`solve_gait` on the
+  unknowns), below the homotopy and multi-start of :mod:`gaitopt.homotopy`;
+* :mod:`~gaitopt.shooting.find` — :func:`find_limit_cycle`, which puts them together, and
+  :func:`solve_task`, its sweep task.
 """
 
 from .certify import certify, check_constraints
-from .find import find_limit_cycle, solve_gait
+from .find import find_limit_cycle, solve_gait, solve_task
 from .newton import METHODS, Solution
 from .problem import MultipleShooting, ShootingProblem, shooting_problem
 from .verify import verify_by_simulation
@@ -27,5 +30,6 @@ __all__ = [
     "find_limit_cycle",
     "shooting_problem",
     "solve_gait",
+    "solve_task",
     "verify_by_simulation",
 ]

@@ -19,6 +19,7 @@ After a reset the integration restarts in the target phase.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -28,7 +29,7 @@ from .phase import PhaseFunctions, _Buffered, _rests_on_guard, integrate_phase
 from .result import Arc, Event, Simulation
 from .zeno import accumulation
 
-__all__ = ["simulate", "Simulation", "Arc", "Event"]
+__all__ = ["simulate", "simulate_task", "Simulation", "Arc", "Event"]
 
 #: SciPy's ``OdeSolver`` classes by name (``scipy.integrate`` is imported on first use: 0.4 s).
 _METHODS = ("DOP853", "RK45", "Radau", "LSODA")
@@ -261,3 +262,21 @@ def _as_policy(model: HybridModel, inputs) -> InputPolicy:
             f" got {u.size}"
         )
     return lambda k, x: u
+
+
+def simulate_task(point: Mapping[str, Any]) -> dict[str, Any]:
+    """Simulate ``point["steps"]`` steps (a task of :func:`gaitopt.sweep.sweep`): ``{"model",
+    "params", "x0": {...}, "steps": N, "record": K}`` → status, steps completed and the last
+    ``K`` section states."""
+    from ..models import model as make_model
+
+    model = make_model(point["model"], **point.get("params", {}))
+    sim = simulate(model, point.get("x0"), steps=int(point["steps"]))
+    keep = int(point.get("record", 1))
+    return {
+        "success": sim.success,
+        "status": sim.status,
+        "steps": sim.steps,
+        "states": sim.section_states[-keep:].tolist() if sim.steps else [],
+        "times": np.diff(sim.section_times)[-keep:].tolist() if sim.steps else [],
+    }
