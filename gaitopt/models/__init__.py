@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 from ..errors import ParameterError, UnknownModelError, did_you_mean
 from ..hybrid import HybridModel
 from .ballistic_walker import BallisticWalker
+from .biped_runner import BipedRunner
 from .bouncing_ball import BouncingBall
 from .compass_gait import CompassGait
 from .five_link_biped import FiveLinkBiped
@@ -38,6 +39,7 @@ __all__ = [
     "as_model",
     "register",
     "unregister",
+    "BipedRunner",
     "BouncingBall",
     "CompassGait",
     "KneedWalker",
@@ -79,6 +81,7 @@ REGISTRY: dict[str, type[HybridModel]] = {
         ThreeLinkWalker,
         PlanarQuadruped,
         PlanarQuadrupedPronk,
+        BipedRunner,
     )
 }
 
