@@ -275,3 +275,13 @@ def test_claims_skip_the_sectors_next_to_a_flagged_ray(wheel):
     points = np.array([[0.5, 0.5], [-0.5, 0.5], [2.0, 2.0]])
     assert estimate.claims(points).tolist() == [False, True, False]
     assert estimate.claims(points, next_to_flags=True).tolist() == [True, True, False]
+
+
+def test_module_doctests():
+    """The examples in gaitopt/basin.py's docstrings (the Wilson interval's reference values)."""
+    import doctest
+    import importlib
+
+    module = importlib.import_module("gaitopt.basin")
+    failures, tried = doctest.testmod(module)
+    assert tried >= 1 and failures == 0
