@@ -126,12 +126,6 @@ def _describe(component: list[str], graph: dict[str, set[str]]) -> str:
 #: cause. The test below leaves out only these edges; any other circle fails, and an entry that
 #: no longer exists or no longer closes a circle fails too (the list can only shrink).
 NOT_YET_FIXED = {
-    # find_limit_cycle -> homotopy -> shooting.gait (the direct solve) -> models -> the
-    # three-link walker -> gaitopt -> find_limit_cycle: closed only by the walker's edge below.
-    ("gaitopt.shooting.find", "gaitopt.homotopy"),
-    # ThreeLinkWalker.max_torque(samples=...) simulates (gaitopt.simulate), and simulate
-    # resolves model names through the registry, which imports the model.
-    ("gaitopt.models.three_link_walker", "gaitopt"),
     # `gaitopt optimize --vary` runs the library subcommand, which uses optimize's parser.
     ("gaitopt.cli.optimize", "gaitopt.cli.optimize_library"),
     # jansen builds a Turn; turn annotates with JansenLinkage (under TYPE_CHECKING).

@@ -51,8 +51,8 @@ feedback (Isidori 1995, §5.1; Grizzle et al. 2001, eq. (40))::
 makes ``ḧ + K_d ḣ + K_p h = 0`` exactly (the tests check it), ``ω_n = omega_n = 5 rad/s``,
 ``ζ = zeta = 1.1``.  ``L_g L_f h`` is invertible wherever ``det(H D⁻¹ B) ≠ 0`` (on the gait it
 stays well away from 0; the tests check it).  The torques along a gait are :meth:`torques`
-(N·m); :meth:`max_torque` gives max |u| over a gait's dense samples (the JSON of
-``gaitopt solve`` has no place for it).
+(N·m); :meth:`max_torque` gives max |u| over a gait's dense samples, or over given states such as
+an independent simulation's (the JSON of ``gaitopt solve`` has no place for it).
 
 **Impact** (Grizzle et al. 2001, §III; Hurmuzlu & Marghitu 1994).  The step ends when ``θ1``
 reaches ``+θ_i`` from below: guard ``θ1 − θ_i`` rising through 0, the paper's switching surface
@@ -93,6 +93,7 @@ forwards or backwards); a *torso fall*, the torso reaching horizontal (``cos θ3
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -410,25 +411,21 @@ class ThreeLinkWalker(HybridModel):
         """Power of the torques ``q̇ᵀ B u`` (W): ``dE/dt`` along the closed loop."""
         return float(self._function("power")(np.asarray(x, dtype=float), self.p))
 
-    def max_torque(self, cycle: Any, samples: int = 0) -> float:
+    def max_torque(self, cycle: Any, states: Sequence[np.ndarray] | None = None) -> float:
         """``max |u_i|`` over a gait (N·m), on the orbit's dense samples.
 
         Parameters
         ----------
         cycle : LimitCycle
             A gait of this model (``find_limit_cycle``).
-        samples : int
-            If positive, re-sample by simulating from the fixed point with this many points
-            per step (:func:`gaitopt.simulate`, independent of the shooting's samples); 0 uses
-            ``cycle.orbit``.
+        states : sequence of arrays, optional
+            States (one per column) to take the maximum on instead of ``cycle.orbit``, e.g. an
+            independent simulation re-sampled with ``n`` points per step:
+            ``[arc.sample(n)[1] for arc in gaitopt.simulate(model, cycle.x,
+            steps=cycle.steps).arcs]`` (the model does not simulate: the simulation resolves
+            models through the registry, which imports this module).
         """
-        if samples:
-            import gaitopt
-
-            sim = gaitopt.simulate(self, cycle.x, steps=cycle.steps)
-            arrays = [arc.sample(samples)[1] for arc in sim.arcs]
-        else:
-            arrays = [arc.x for arc in cycle.orbit]
+        arrays = [arc.x for arc in cycle.orbit] if states is None else list(states)
         return float(max(np.max(np.abs(self.torques(X))) for X in arrays))
 
     def impact_velocities(self, x_minus: np.ndarray) -> np.ndarray:
