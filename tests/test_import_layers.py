@@ -121,44 +121,8 @@ def _describe(component: list[str], graph: dict[str, set[str]]) -> str:
     return "circle of " + ", ".join(component) + "\n    " + "\n    ".join(edges)
 
 
-#: NOT YET FIXED (issue 19 item 5, left when time ran out): the imports that still close the
-#: circles found on the tree, each to be removed from this list as its circle is fixed at its
-#: cause. The test below leaves out only these edges; any other circle fails, and an entry that
-#: no longer exists or no longer closes a circle fails too (the list can only shrink).
-NOT_YET_FIXED = {
-    # `gaitopt optimize --vary` runs the library subcommand, which uses optimize's parser.
-    ("gaitopt.cli.optimize", "gaitopt.cli.optimize_library"),
-    # jansen builds a Turn; turn annotates with JansenLinkage (under TYPE_CHECKING).
-    ("gaitopt.linkage.turn", "gaitopt.linkage.jansen"),
-}
-
-
-def _reaches(graph: dict[str, set[str]], start: str, goal: str) -> bool:
-    seen, todo = {start}, [start]
-    while todo:
-        node = todo.pop()
-        if node == goal:
-            return True
-        for child in graph[node] - seen:
-            seen.add(child)
-            todo.append(child)
-    return False
-
-
-def test_each_edge_left_unfixed_still_closes_a_circle():
-    graph = import_graph(module_files())
-    stale = [
-        f"{a} -> {b}"
-        for a, b in sorted(NOT_YET_FIXED)
-        if b not in graph.get(a, set()) or not _reaches(graph, b, a)
-    ]
-    assert not stale, "fixed (remove from NOT_YET_FIXED): " + ", ".join(stale)
-
-
 def test_the_module_graph_has_no_circles():
     graph = import_graph(module_files())
-    for a, b in NOT_YET_FIXED:
-        graph[a].discard(b)
     found = circles(graph)
     assert not found, f"{len(found)} import circle(s):\n" + "\n".join(
         _describe(c, graph) for c in found

@@ -57,7 +57,7 @@ def run_library(args: argparse.Namespace, model: Any, options: dict[str, Any]) -
     the exit status."""
     from ..optimize.library import gait_library
     from .common import EXIT_BAD_INPUT, EXIT_NOT_FOUND, EXIT_OK, InputError
-    from .optimize import for_the_cli
+    from .optimize_advice import for_the_cli
     from .output import _print_json, _solver_output_to_stderr, write_outputs
 
     vary, values = _parse_library(args, model, options)

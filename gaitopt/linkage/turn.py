@@ -7,12 +7,9 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from .jansen import JansenLinkage
 
 __all__ = ["Turn", "SIX_PAIR_PHASES", "GROUND_BAND"]
 
@@ -22,12 +19,27 @@ SIX_PAIR_PHASES = (0.0, 2 * math.pi / 3, 4 * math.pi / 3, math.pi / 3, math.pi, 
 GROUND_BAND = 0.005
 
 
+class Linkage(Protocol):
+    """What a turn needs of its linkage (:class:`~gaitopt.linkage.jansen.JansenLinkage`, which
+    builds turns: a protocol, so that this module does not import it back)."""
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def params(self) -> dict[str, float]: ...
+
+    def solve(
+        self, theta: float, guess: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]: ...
+
+
 @dataclass(frozen=True)
 class Turn:
     """One crank turn of a linkage, sampled: ``thetas`` (N+1,), joints ``z`` and ``dz/dθ``
     (N+1, 5, 2; m and m/rad).  :meth:`at` solves exactly between samples."""
 
-    linkage: JansenLinkage
+    linkage: Linkage
     thetas: np.ndarray
     z: np.ndarray
     dz: np.ndarray
