@@ -39,6 +39,7 @@ import numpy as np
 
 from .arguments import check_count, check_positive, check_scheduler
 from .errors import GaitoptInputError
+from .threads import single_blas_thread
 
 __all__ = [
     "basin",
@@ -522,6 +523,7 @@ def _chosen(name: str, given: Sequence[str] | None, coordinates: Sequence[str], 
 
 
 # -- the estimates ---------------------------------------------------------------------------
+@single_blas_thread
 def basin(
     gait: Any,
     *,

@@ -36,6 +36,7 @@ from ..errors import GaitoptInputError, ParameterError, did_you_mean
 from ..hybrid import HybridModel
 from ..result import LimitCycle
 from ..shooting import find_limit_cycle
+from ..threads import single_blas_thread
 from .branch import Branch, PseudoArclength, SpecialPoint
 from .follower import Follower
 from .switching import switch_at_period_doubling
@@ -49,6 +50,7 @@ DEFAULT_MAX_PERIOD = 8
 DEFAULT_OPTIONS = PseudoArclength()
 
 
+@single_blas_thread
 def continuation(
     model: HybridModel,
     param: str,

@@ -26,6 +26,7 @@ from ..errors import GaitoptInputError, ParameterError
 from ..hybrid import HybridModel
 from ..result import LimitCycle
 from ..shooting import ShootingProblem, shooting_problem
+from ..threads import single_blas_thread
 from .follower import CurveFollower
 from .result import Curve
 from .system import (
@@ -43,6 +44,7 @@ CURVE_STEPS = PseudoArclength(step=0.05, max_step=0.2)
 BRANCH_STEPS = PseudoArclength()
 
 
+@single_blas_thread
 def bifurcation_curve(
     model: HybridModel,
     kind: str,

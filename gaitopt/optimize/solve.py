@@ -21,6 +21,7 @@ import numpy as np
 from ..arguments import check_count, check_positive, check_scheduler
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
+from ..threads import single_blas_thread
 from .active import _active
 from .arcs import _describe, describe_bounds, detect_bound_arcs, detect_structure, structure_of
 from .attempt import (
@@ -64,6 +65,7 @@ MAX_MESH_DEGREE = 10
 _MAX_REFINEMENTS = 3
 
 
+@single_blas_thread
 def optimize_gait(
     model: HybridModel,
     cost: str | Callable[..., Any] = "effort",

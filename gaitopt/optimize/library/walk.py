@@ -11,6 +11,7 @@ import numpy as np
 
 from ...errors import GaitoptInputError, did_you_mean
 from ...hybrid import HybridModel
+from ...threads import single_blas_thread
 from ..result import OptimalGait
 from ..solve import optimize_gait
 from .cold import cold_checks as _cold_checks
@@ -54,6 +55,7 @@ def _values(values: Sequence[float]) -> np.ndarray:
     return v
 
 
+@single_blas_thread
 def gait_library(
     model: HybridModel,
     vary: str,

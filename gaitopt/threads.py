@@ -1,0 +1,67 @@
+"""One BLAS thread while gaitopt computes: its linear algebra is many small dense solves.
+
+gaitopt's Newton steps, continuation correctors and Floquet eigenvalue problems factor matrices of
+tens to a few hundred rows, thousands of times.  Multithreaded BLAS (OpenBLAS starts one thread per
+core) does not speed those up, and on a loaded machine it slows them down badly: waking and
+synchronising threads costs more than the work.  Measured on the 2-core development machine under
+load, the compass gait's period-doubling cascade to period 8 (``continuation(compass_gait, "slope",
+to=0.09)``) took 103 s wall / 38 s CPU with two BLAS threads and 32 s / 7 s with one.
+
+:func:`single_blas_thread` wraps the public entry points (``find_limit_cycle``, ``continuation``,
+``bifurcation_curve``, ``optimize_gait``, ``gait_library``, ``basin``): while one runs, the BLAS
+libraries loaded in the process (NumPy's and SciPy's OpenBLAS, MKL, ...) use one thread, and the
+caller's setting is restored when it returns, so a user's own large matrix products elsewhere in
+the same process keep their threads.  Parallel work in gaitopt comes from processes (Dask
+workers), never from BLAS threads.  ``GAITOPT_BLAS_THREADS=N`` sets another count, ``0`` leaves
+BLAS alone.  Limits come from threadpoolctl (the library scikit-learn uses for the same purpose).
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+__all__ = ["single_blas_thread", "blas_threads"]
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+_controller = None
+
+
+def blas_threads() -> int:
+    """Threads BLAS may use inside gaitopt's entry points (``GAITOPT_BLAS_THREADS``, default 1;
+    0: BLAS is left as it is)."""
+    text = os.environ.get("GAITOPT_BLAS_THREADS", "1").strip()
+    try:
+        value = int(text)
+    except ValueError:
+        value = 1
+    return max(value, 0)
+
+
+def _limits(threads: int):
+    """The threadpoolctl context limiting every loaded BLAS to ``threads`` threads."""
+    global _controller
+    if _controller is None:
+        import scipy.linalg  # noqa: F401  (SciPy's own BLAS: loaded, so that it is limited too)
+        from threadpoolctl import ThreadpoolController
+
+        _controller = ThreadpoolController()
+    return _controller.limit(limits=threads, user_api="blas")
+
+
+def single_blas_thread(function: F) -> F:
+    """Decorate an entry point so that it runs with :func:`blas_threads` BLAS threads (nested
+    calls cost one cheap re-limit, about 0.2 ms)."""
+
+    @functools.wraps(function)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        threads = blas_threads()
+        if threads == 0:
+            return function(*args, **kwargs)
+        with _limits(threads):
+            return function(*args, **kwargs)
+
+    return wrapper  # type: ignore[return-value]
