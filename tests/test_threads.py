@@ -18,6 +18,7 @@ def _blas_threads() -> set[int]:
 @pytest.mark.parametrize(
     "entry",
     [
+        gaitopt.find_limit_cycle,
         gaitopt.continuation,
         gaitopt.optimize_gait,
         gaitopt.basin,

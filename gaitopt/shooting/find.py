@@ -13,12 +13,14 @@ from typing import Any
 
 from ..hybrid import HybridModel
 from ..result import LimitCycle
+from ..threads import single_blas_thread
 from .gait import check_arguments, gait_task, solve_from_guess, solve_gait
 from .problem import MultipleShooting
 
 __all__ = ["find_limit_cycle", "solve_gait", "solve_task"]
 
 
+@single_blas_thread
 def find_limit_cycle(
     model: HybridModel,
     guess: Mapping[str, float] | LimitCycle | None = None,
