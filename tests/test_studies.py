@@ -532,3 +532,40 @@ def test_kneed_cot_chains_from_both_ends_reach_the_minimum_the_cold_starts_miss(
     assert points[0.68][-1]["start"] == "from above, pass 2"
     assert all(study.lowest(points[v]) is None for v in [0.68])
     assert sum(len(a) for a in points.values()) == 5 + 4 + 4 + 3
+
+
+def test_planar_quadruped_study_pronk_and_bound_are_unstable_passive_gaits(tmp_path):
+    """problems/planar_quadruped.py --fast.  The pronk at the defaults is the SLIP of stiffness
+    2k (tests/test_planar_quadruped.py: apex speed 0.90945063 m/s, multiplier 3.5305550, to
+    1e-6 here since both are re-solved to 1e-10); the bound's default multipliers 4.1217 (1e-4,
+    as tests/test_planar_quadruped.py).  Along the energy branch at θ_b = θ_f = 0.21 rad the bound
+    ends at two boundaries bracketing 90 J where a flight phase's duration reaches zero (≤ 1e-6 s:
+    the apex meets a touchdown or a lift-off, the gait leaves its phase sequence).  The study's
+    window verdict agrees with every computed bound's |λ|max in the written tables."""
+    _run("planar_quadruped", tmp_path)
+    folder = tmp_path / "planar_quadruped_study"
+    summary = _load(folder, "summary.json")
+    pronk, bound = summary["defaults"]["pronk"], summary["defaults"]["bound"]
+    assert pronk["speed"] == pytest.approx(0.90945063, abs=1e-6)
+    assert pronk["max_abs_multiplier"] == pytest.approx(3.5305550, abs=1e-6)
+    assert bound["max_abs_multiplier"] == pytest.approx(4.1217, abs=1e-4)
+    energy = summary["branches"]["pronk_energy"]
+    assert energy["range"] == pytest.approx([70.0, 200.0], abs=1e-9)
+    branch = summary["branches"]["bound_energy_theta_0.21"]
+    edges = [sp for sp in branch["special_points"] if sp["kind"] == "boundary"]
+    assert len(edges) == 2 and edges[0]["param"] < 90.0 < edges[1]["param"]
+    assert all(sp["shortest_phase_duration"] <= 1e-6 for sp in edges)
+    assert all(sp["shortest_phase"] in ("descent", "ascent") for sp in edges)
+    # Window verdict = the tables: a bound is stable iff its largest |multiplier| < 1.
+    rows = np.genfromtxt(folder / "theta_scan.csv", delimiter=",", names=True)
+    moduli = list(rows["max_abs_multiplier"])
+    for name in summary["branches"]:
+        if name.startswith("bound"):
+            table = np.genfromtxt(folder / f"{name}.csv", delimiter=",", names=True)
+            moduli += list(table["max_abs_multiplier"])
+    assert len(moduli) == summary["bound_points_examined"] >= 10
+    window = summary["bound_self_stable_window"]
+    assert (window is None) == (min(moduli) >= 1.0)
+    assert summary["bound_least_unstable"]["max_abs_multiplier"] == pytest.approx(min(moduli))
+    assert summary["theta_scan"]["found"][0] < 0.21 < summary["theta_scan"]["found"][1]
+    assert (folder / "branches.png").stat().st_size > 0
