@@ -137,12 +137,16 @@ def section_guess(
 
 
 def check_scheduler(scheduler: object, *, serial: bool = False) -> None:
-    """Refuse a ``scheduler`` that is not ``None``, ``"local"`` (``"serial"`` where ``serial``)
-    or a Dask scheduler address (``"tcp://host:8786"``, ``"host:8786"``) before any work, with
-    one line naming the argument, instead of Dask's error when it tries to connect."""
+    """Refuse a ``scheduler`` that is not ``None``, ``"local"`` (``"serial"`` where ``serial``,
+    i.e. for :func:`gaitopt.sweep.sweep`, which also takes a connected
+    ``dask.distributed.Client``) or a Dask scheduler address (``"tcp://host:8786"``,
+    ``"host:8786"``) before any work, with one line naming the argument, instead of Dask's error
+    when it tries to connect."""
     names = ("local", "serial") if serial else ("local",)
-    if scheduler is None or scheduler in names:
+    if scheduler is None or (isinstance(scheduler, str) and scheduler in names):
         return
+    if serial and callable(getattr(scheduler, "submit", None)):
+        return  # a connected dask.distributed.Client (gaitopt.sweep uses it as it is)
     address = scheduler.split("://", 1)[-1] if isinstance(scheduler, str) else ""
     host, _, port = address.rpartition(":")
     if not (host and port.isdigit()):

@@ -7,6 +7,18 @@ loses nothing; run again with the same journal and it computes only the missing 
 result is ordered by point index whatever order the points finished in, so the output is
 deterministic.
 
+Points travel to Dask workers in chunks (``chunk`` points per task, by default about four tasks
+per worker), so that Dask's per-task overhead does not dominate short tasks; each finished chunk
+is journaled with one fsync, and resumption stays per point.  ``scheduler`` may also be a
+connected ``dask.distributed.Client``, e.g. of a batch-system cluster from ``dask-jobqueue``::
+
+    from dask.distributed import Client
+    from dask_jobqueue import SLURMCluster
+
+    cluster = SLURMCluster(cores=1, processes=1, memory="2GB", walltime="01:00:00")
+    cluster.scale(jobs=32)
+    result = sweep(solve_task, points, scheduler=Client(cluster), journal="map.jsonl")
+
 The sweep knows nothing of models: the tasks live with what they run —
 :func:`gaitopt.shooting.solve_task` (a limit cycle and its multipliers at given parameters —
 stability maps, brute-force branches) and :func:`gaitopt.simulation.simulate_task` (many steps
@@ -25,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from .arguments import check_scheduler
+from .arguments import check_count, check_scheduler
 from .errors import GaitoptInputError
 from .files import jsonable
 
@@ -78,8 +90,9 @@ def sweep(
     points: Sequence[Mapping[str, Any]],
     *,
     journal: str | os.PathLike | None = None,
-    scheduler: str | None = None,
+    scheduler: Any = None,
     workers: int = 2,
+    chunk: int | None = None,
     progress: bool = True,
     description: str = "sweep",
 ) -> SweepResult:
@@ -94,11 +107,19 @@ def sweep(
     journal : path, optional
         JSON Lines file of finished points.  If it exists and belongs to the same grid, its points
         are not computed again (resume); a journal of another grid is an error.
-    scheduler : str, optional
+    scheduler : str or dask.distributed.Client, optional
         ``"serial"`` (in this process), ``None``/``"local"`` (a local Dask cluster of ``workers``
-        single-threaded processes), or a Dask scheduler address (``"tcp://host:8786"``).
+        single-threaded processes), a Dask scheduler address (``"tcp://host:8786"``), or a
+        connected ``dask.distributed.Client`` (e.g. of a ``dask_jobqueue.SLURMCluster``; it is
+        used, not closed).
     workers : int
         Processes of the local cluster.
+    chunk : int, optional
+        Points per Dask task (each task runs its points one after another; the journal gets a
+        chunk's points with one fsync).  Default: enough points that each of the cluster's
+        workers gets about four tasks (at most :data:`MAX_CHUNK` points each), so that a task
+        is long against Dask's per-task overhead (its guidance: ≥ ~100 ms) and the work still
+        balances.  Resumption stays per point: a journal records each point.
     progress : bool
         Show a progress bar (tqdm) on stderr.
     description : str
@@ -112,6 +133,8 @@ def sweep(
     check_scheduler(scheduler, serial=True)
     if workers < 1:
         raise GaitoptInputError(f"`workers` must be at least 1, got {workers!r}")
+    if chunk is not None:
+        chunk = check_count("chunk", chunk, 1, MAX_CHUNK, "a chunk is one task's work")
     fingerprint = _fingerprint(task, points)
     results: list[dict[str, Any] | None] = [None] * len(points)
     reused: list[int] = []
@@ -126,41 +149,65 @@ def sweep(
         _Journal(path, fingerprint) as log,
         _progress(len(points), len(reused), progress, description) as bar,
     ):
-        for index, result in _run(task, points, todo, scheduler, workers):
-            result = jsonable(result)
-            log.append(index, points[index], result)
-            results[index] = result
-            computed.append(index)
-            bar.update(1)
+        for finished in _run(task, points, todo, scheduler, workers, chunk):
+            finished = [(index, jsonable(result)) for index, result in finished]
+            log.append([(index, points[index], result) for index, result in finished])
+            for index, result in finished:
+                results[index] = result
+                computed.append(index)
+            bar.update(len(finished))
     return SweepResult(points, results, computed, sorted(reused), path)  # type: ignore[arg-type]
 
 
 # -- execution ---------------------------------------------------------------------------------
-def _run(task: Task, points, todo, scheduler, workers):
-    """Yield ``(index, result)`` as points finish."""
+#: Most points in one Dask task.
+MAX_CHUNK = 10_000
+
+
+def run_chunk(task: Task, chunk: Sequence[Mapping[str, Any]]) -> list[Mapping[str, Any]]:
+    """One Dask task: ``task`` on each point of ``chunk``, in order."""
+    return [task(point) for point in chunk]
+
+
+def _chunks(todo: list[int], size: int) -> list[list[int]]:
+    return [todo[k : k + size] for k in range(0, len(todo), size)]
+
+
+def _run(task: Task, points, todo, scheduler, workers, chunk):
+    """Yield lists of ``(index, result)`` as points (serial) or chunks (Dask) finish."""
     if not todo:
         return
     if scheduler == "serial":
         for i in todo:
-            yield i, task(points[i])
+            yield [(i, task(points[i]))]
         return
     from dask.distributed import Client, LocalCluster, as_completed
 
+    cluster, own = None, True
     if scheduler in (None, "local"):
         cluster = LocalCluster(
             n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
         )
         client = Client(cluster)
-    else:
-        cluster, client = None, Client(scheduler)
+    elif isinstance(scheduler, str):
+        client = Client(scheduler)
+    else:  # a connected Client: the caller's, left open
+        client, own = scheduler, False
     try:
-        futures = {client.submit(task, points[i], pure=False): i for i in todo}
+        if chunk is None:
+            n_workers = max(1, len(client.scheduler_info().get("workers", {})) or workers)
+            chunk = min(MAX_CHUNK, max(1, -(-len(todo) // (4 * n_workers))))
+        futures = {
+            client.submit(run_chunk, task, [points[i] for i in part], pure=False): part
+            for part in _chunks(todo, chunk)
+        }
         for future in as_completed(futures):
-            yield futures[future], future.result()
+            yield list(zip(futures[future], future.result(), strict=True))
     finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        if own:
+            client.close()
+            if cluster is not None:
+                cluster.close()
 
 
 # -- the journal -------------------------------------------------------------------------------
@@ -179,12 +226,16 @@ class _Journal:
                 self._write({"sweep": self.fingerprint})
         return self
 
-    def append(self, index: int, point: Mapping[str, Any], result: Mapping[str, Any]) -> None:
+    def append(self, finished: Sequence[tuple[int, Mapping[str, Any], Mapping[str, Any]]]) -> None:
+        """One line per finished point, written and synced to disk together."""
         if self.handle is not None:
-            self._write({"index": index, "point": jsonable(point), "result": result})
+            self._write(
+                *({"index": i, "point": jsonable(point), "result": result}
+                  for i, point, result in finished)
+            )  # fmt: skip
 
-    def _write(self, record: Mapping[str, Any]) -> None:
-        self.handle.write(json.dumps(record, allow_nan=False) + "\n")
+    def _write(self, *records: Mapping[str, Any]) -> None:
+        self.handle.write("".join(json.dumps(r, allow_nan=False) + "\n" for r in records))
         self.handle.flush()
         os.fsync(self.handle.fileno())
 

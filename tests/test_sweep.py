@@ -107,3 +107,44 @@ def test_solve_task_reports_failures_as_data():
     assert ok["success"] and ok["stable"]
     none = solve_task({"model": "rimless_wheel", "params": {"slope": 0.03}})
     assert not none["success"] and none["stable"] is None
+
+
+def test_chunked_tasks_give_the_serial_results_and_journal_every_point(tmp_path):
+    """Points go to Dask in chunks (issue 23: one task per point made Dask's overhead and a
+    fsync per point dominate); the results, their order and the per-point journal are the same
+    as serially, whatever the chunk size, and a journal written in chunks resumes per point."""
+    serial = sweep(simulate_task, POINTS, scheduler="serial", progress=False)
+    journal = tmp_path / "chunked.jsonl"
+    chunked = sweep(
+        simulate_task,
+        POINTS,
+        scheduler="local",
+        workers=2,
+        chunk=4,
+        progress=False,
+        journal=journal,
+    )
+    assert chunked.results == serial.results
+    lines = journal.read_text().splitlines()
+    assert len(lines) == 1 + len(POINTS)  # the header, then one line per point
+    assert sorted(json.loads(line)["index"] for line in lines[1:]) == list(range(len(POINTS)))
+    # Resume after losing the last chunk's lines: only those points are computed again.
+    journal.write_text("\n".join(lines[:-2]) + "\n")
+    again = sweep(simulate_task, POINTS, scheduler="serial", progress=False, journal=journal)
+    assert again.results == serial.results and len(again.computed) == 2
+
+
+def test_a_connected_client_is_used_and_left_open(tmp_path):
+    from dask.distributed import Client, LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                      dashboard_address=None) as cluster, Client(cluster) as client:  # fmt: skip
+        result = sweep(simulate_task, POINTS[:3], scheduler=client, progress=False)
+        assert client.status == "running"  # not closed by the sweep
+    serial = sweep(simulate_task, POINTS[:3], scheduler="serial", progress=False)
+    assert result.results == serial.results
+
+
+def test_chunk_out_of_range_is_refused():
+    with pytest.raises(GaitoptInputError, match="`chunk`"):
+        sweep(simulate_task, POINTS, scheduler="serial", chunk=0, progress=False)
