@@ -98,7 +98,7 @@ def seed_of(attempts: list[dict]) -> int | None:
 def disagreement(attempts: list[dict]) -> str:
     """Empty where the certified attempts agree to :data:`SAME` (or fewer than two are
     certified); else every certified attempt's cost, lowest first, e.g.
-    ``"from below 0.01942516337 < from above 0.04333637603"``."""
+    ``"from below 0.01942516336 < from above 0.04333637603"``."""
     good = sorted((a["cost"], a["start"]) for a in attempts if a["success"])
     if len(good) < 2 or good[-1][0] <= good[0][0] * (1 + SAME):
         return ""
@@ -249,13 +249,30 @@ def main(argv: list[str] | None = None) -> int:
           f"{', '.join(f'{v:.2f}' for v in flagged) or 'none'}; "
           f"{time.perf_counter() - t_start:.0f} s in all")  # fmt: skip
 
-    good = draw([(r[0], r[1], bool(r[4])) for r in rows], folder)
+    good = draw([(r[0], r[1], bool(r[4])) for r in rows], folder,
+                _worse([(r[0], r[13], r[14]) for r in rows]))  # fmt: skip
     return 0 if good else 1
 
 
-def draw(points: list[tuple[float, float | None, bool]], folder: Path) -> bool:
-    """``cot.png``: the certified optima (speed, cot) and the speeds with none, at 0; returns
-    whether any is certified."""
+def _worse(rows: list[tuple]) -> list[tuple[float, float]]:
+    """(speed, cost) of every certified local minimum above the least one at each flagged speed,
+    from rows ``(speed, flagged, minima)`` (``minima``: "start cost < start cost ...", lowest
+    first)."""
+    return [
+        (float(r[0]), float(part.rsplit(" ", 1)[1]))
+        for r in rows
+        if r[1]
+        for part in r[2].split(" < ")[1:]
+    ]
+
+
+def draw(
+    points: list[tuple[float, float | None, bool]],
+    folder: Path,
+    worse: list[tuple[float, float]] = (),
+) -> bool:
+    """``cot.png``: the certified optima (speed, cot), the worse certified local minima of the
+    flagged speeds and the speeds with none, at 0; returns whether any is certified."""
     fig, ax = plt.subplots(figsize=(6, 4.2))
     good = [(v, c) for v, c, ok in points if ok]
     if good:
@@ -263,6 +280,9 @@ def draw(points: list[tuple[float, float | None, bool]], folder: Path) -> bool:
     bad = [v for v, _, ok in points if not ok]
     if bad:
         ax.plot(bad, np.zeros(len(bad)), "rx", ms=9, label="no certified optimum (at 0)")
+    if worse:
+        ax.plot(*zip(*worse, strict=True), "s", mfc="none", color="C1",
+                label="worse local minimum (flagged)")  # fmt: skip
     ax.set_xlabel("speed v (m/s)")
     ax.set_ylabel(r"cost of transport $c_T = W^+/(M g d)$ (1)")
     ax.set_title(
@@ -288,6 +308,8 @@ def redraw(folder: Path) -> None:
             for r in rows
         ],
         folder,
+        _worse([(r["speed_m_per_s"], r["different_minima"] == "True", r["minima"])
+                for r in rows]),
     )  # fmt: skip
 
 

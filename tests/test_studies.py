@@ -395,6 +395,9 @@ def test_kneed_cot_reports_the_lowest_certified_attempt_and_flags_different_mini
     assert study.disagreement(same) == ""
     assert study.lowest([attempt("cold", None), attempt("from above", None)]) is None
     assert study.disagreement([attempt("cold", 0.03), attempt("from above", None)]) == ""
+    # cot.png marks the worse minima of the flagged speeds (from the CSV's `minima`).
+    flagged = [(0.8, True, "from below 0.0194 < from above 0.0433"), (0.84, False, "")]
+    assert study._worse(flagged) == [(0.8, 0.0433)]
     # A chain continues from the lowest certified attempt, else from the lowest converged one
     # its checks rejected (a start, not a result), else from nowhere.
     rejected = [attempt("cold", None, 0.0075), attempt("from above", None, 0.0074)]
