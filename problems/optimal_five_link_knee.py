@@ -94,9 +94,10 @@ def main(argv: list[str] | None = None) -> int:
         row, gait = solve(knee, starts, tol)
         rows.append(row)
         spans[row["case"]] = getattr(gait, "active_spans", {})
+        stance, swing = row["min_stance_knee_flexion_rad"], row["min_swing_knee_flexion_rad"]
         print(f"{row['case']}: cost {row['cost']}, success {row['success']}, disc. error "
-              f"{row['discretisation_error']}, knee flexion min {row['min_stance_knee_flexion_rad']:.3g}"
-              f" / {row['min_swing_knee_flexion_rad']:.3g} rad, {row['time_s']:.0f} s")  # fmt: skip
+              f"{row['discretisation_error']}, knee flexion min {stance:.3g}"
+              f" / {swing:.3g} rad, {row['time_s']:.0f} s")  # fmt: skip
         print(f"  {row['message']}")
     if len(rows) == 2:
         limited, free = rows
