@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: install gaits studies test bench lint clean
+.PHONY: install gaits studies test test-slow bench lint clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -19,7 +19,10 @@ gaits: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m gaitopt.gaits --out results
 
 test: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n auto  # one worker per CPU (pytest-xdist)
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n auto -m "not slow"  # one worker per CPU (pytest-xdist)
+
+test-slow: $(STAMP)  # the tests marked slow (>= 25 s each); CI runs them after `make test`
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n auto -m slow
 
 studies: $(STAMP)
 	@set -e; for script in problems/*.py; do \

@@ -140,6 +140,7 @@ def test_inactive_bound_leaves_the_unbounded_optimum(compass):
     assert "at the bound" not in loose.message
 
 
+@pytest.mark.slow  # ≥ 25 s: run by `make test-slow` (CI runs both)
 def test_five_link_with_an_active_torque_bound():
     """OptimTraj's five-link problem (0.4 m in 0.6 s, |q| ≤ π/2, |q̇| ≤ 10) from start 4, with
     |u| ≤ 25 N·m instead of 100: the unbounded optimum 263.6988459642 (README) peaks at

@@ -171,6 +171,7 @@ def test_cli_excluding_bound_reports_failure(capsys):
     assert report["success"] is False and "-0.1 <= stance <= 0.1" in report["message"]
 
 
+@pytest.mark.slow  # ≥ 25 s: run by `make test-slow` (CI runs both)
 def test_five_link_knee_study_fast(tmp_path):
     # problems/optimal_five_link_knee.py --fast: the knee-limited 0.5 m / 0.7 s step of OptimTraj
     # (MAIN.m c8d1d91, pathConstraint.m 867eeb3), one start, refinement target 1e-3.  The knee

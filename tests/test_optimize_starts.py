@@ -75,6 +75,7 @@ def test_only_a_start_that_cannot_begin_is_a_failed_result():
     assert report["minima"] == [] and report["starts"][0]["status"] == "no_start"
 
 
+@pytest.mark.slow  # ≥ 25 s: run by `make test-slow` (CI runs both)
 def test_twenty_starts_from_the_cli(capsys):
     # The command, at the size users run (29 s on a loaded 2-core machine; it used to
     # exit 2 after two minutes with no JSON): exit 0 with one JSON object, start 13 among the

@@ -406,6 +406,7 @@ def test_kneed_cot_reports_the_lowest_certified_attempt_and_flags_different_mini
     assert study.seed_of([attempt("cold", None), attempt("from below", None)]) is None
 
 
+@pytest.mark.slow  # ≥ 25 s: run by `make test-slow` (CI runs both)
 def test_kneed_cot_fast_mode_keeps_the_lowest_certified_optimum(tmp_path):
     # Fast mode: 0.80 and 0.84 m/s, a cold start at each and the chains between them.  At every
     # speed the reported gait is the lowest certified attempt (exactly), the flag is set iff the
