@@ -21,7 +21,8 @@ Distances are in *scaled* section coordinates: coordinate ``i`` divided by ``sca
 ``|x*_i|`` of the fixed point, 1 where that is 0), so radii, windows and ``tol`` are
 dimensionless fractions of the scale.
 
-Each estimate runs on :func:`gaitopt.sweep.sweep`, one task per chunk of rays or starts:
+Each estimate runs on :func:`gaitopt.sweep.sweep`, one point per ray or start, sent to Dask
+``chunk`` points per task (the sweep's chunking):
 serially by default (``scheduler=None``), on a local Dask cluster (``"local"``) or a running
 scheduler (``"tcp://host:8786"``).
 """
@@ -56,6 +57,8 @@ __all__ = [
 MAX_RAYS = 4096
 MAX_POINTS = 400
 MAX_SAMPLES = 100_000
+#: Most points per Dask task (the sweep's limit).
+MAX_CHUNK = 10_000
 MAX_STEPS = 10_000
 _LIMIT = "each is one simulation of up to steps + hold periods; run several smaller estimates"
 #: Two-sided 95 % normal quantile of the Wilson interval.
@@ -445,14 +448,14 @@ def _model_of(setup: Mapping[str, Any]) -> Any:
 
 
 def _starts_task(point: Mapping[str, Any]) -> dict[str, Any]:
-    """A chunk of starts (section coordinates) → their outcomes (a task of :func:`sweep`)."""
+    """Starts (section coordinates) → their outcomes (a point of :func:`sweep`)."""
     setup = point["setup"]
     model = _model_of(setup)
     return {"outcomes": [_classify(setup, model, np.asarray(s)) for s in point["starts"]]}
 
 
 def _rays_task(point: Mapping[str, Any]) -> dict[str, Any]:
-    """A chunk of rays → per ray the radius, first failure and scan (a task of :func:`sweep`)."""
+    """Rays → per ray the radius, first failure and scan (a point of :func:`sweep`)."""
     setup = point["setup"]
     model = _model_of(setup)
     centre, scale = np.asarray(setup["centre"]), np.asarray(setup["scale"])
@@ -484,12 +487,21 @@ def _rays_task(point: Mapping[str, Any]) -> dict[str, Any]:
     return {"rays": rays}
 
 
-def _run(task: Any, points: list[dict[str, Any]], scheduler: str | None) -> list[dict[str, Any]]:
+def _run(
+    task: Any, points: list[dict[str, Any]], scheduler: str | None, chunk: int
+) -> list[dict[str, Any]]:
+    """``task`` on every point through :func:`gaitopt.sweep.sweep`, which sends them to Dask
+    ``chunk`` points per task (serially: one after another)."""
     from .sweep import sweep
 
     check_scheduler(scheduler, serial=True)
     result = sweep(
-        task, points, scheduler=scheduler or "serial", progress=False, description="basin"
+        task,
+        points,
+        scheduler=scheduler or "serial",
+        chunk=chunk,
+        progress=False,
+        description="basin",
     )
     return result.results
 
@@ -635,15 +647,15 @@ def basin(
         )
     points = [
         setup.point(
-            directions=directions[i : i + chunk].tolist(),
+            directions=[direction],
             coordinates=chosen,
             scan=scan,
             bisections=bisections,
             max_radius=max_radius,
         )
-        for i in range(0, n, chunk)
+        for direction in directions.tolist()
     ]
-    found = [ray for r in _run(_rays_task, points, scheduler) for ray in r["rays"]]
+    found = [ray for r in _run(_rays_task, points, scheduler, chunk) for ray in r["rays"]]
     radii = np.array([ray["radius"] for ray in found], dtype=float)
     failure = np.array(
         [np.nan if ray["first_failure"] is None else ray["first_failure"] for ray in found],
@@ -699,10 +711,8 @@ def _window(setup: _Setup, window: Any) -> dict[str, tuple[float, float]]:
 
 
 def _outcomes(setup: _Setup, starts: np.ndarray, chunk: int, scheduler: str | None) -> list[str]:
-    points = [
-        setup.point(starts=starts[i : i + chunk].tolist()) for i in range(0, len(starts), chunk)
-    ]
-    return [o for r in _run(_starts_task, points, scheduler) for o in r["outcomes"]]
+    points = [setup.point(starts=[start]) for start in starts.tolist()]
+    return [o for r in _run(_starts_task, points, scheduler, chunk) for o in r["outcomes"]]
 
 
 def classify_starts(
@@ -733,7 +743,7 @@ def classify_starts(
     list of str
     """
     setup = _setup(gait, steps, hold, tol, scale)
-    chunk = check_count("chunk", chunk, 1, MAX_SAMPLES, _LIMIT)
+    chunk = check_count("chunk", chunk, 1, MAX_CHUNK, _LIMIT)
     check_scheduler(scheduler, serial=True)
     starts = np.atleast_2d(np.asarray(starts, dtype=float))
     if starts.shape[1] != len(setup.coordinates) or not np.all(np.isfinite(starts)):
@@ -785,7 +795,7 @@ def basin_slice(
     started = time.perf_counter()
     setup = _setup(gait, steps, hold, tol, scale)
     points = check_count("points", points, 2, MAX_POINTS, _LIMIT)
-    chunk = check_count("chunk", chunk, 1, MAX_POINTS**2, _LIMIT)
+    chunk = check_count("chunk", chunk, 1, MAX_CHUNK, _LIMIT)
     pair = _chosen("coordinates", coordinates, setup.coordinates, 2)
     check_scheduler(scheduler, serial=True)
     box = _window(setup, window)
@@ -849,7 +859,7 @@ def basin_fraction(
     started = time.perf_counter()
     setup = _setup(gait, steps, hold, tol, scale)
     samples = check_count("samples", samples, 1, MAX_SAMPLES, _LIMIT)
-    chunk = check_count("chunk", chunk, 1, MAX_SAMPLES, _LIMIT)
+    chunk = check_count("chunk", chunk, 1, MAX_CHUNK, _LIMIT)
     check_scheduler(scheduler, serial=True)
     box = _window(setup, window)
     low = np.array([box[c][0] for c in setup.coordinates])

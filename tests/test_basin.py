@@ -222,22 +222,23 @@ def test_cli_bad_counts_before_any_work(capsys, argv):
 
 
 def test_chunks_and_scheduler_reach_the_sweep(wheel, monkeypatch):
-    """One sweep task per chunk of rays, and ``scheduler=`` handed to gaitopt.sweep.sweep as given
-    (the recorded call is then run serially)."""
+    """One sweep point per ray, with ``chunk=`` (points per Dask task: the sweep's chunking) and
+    ``scheduler=`` handed to gaitopt.sweep.sweep as given (the recorded call is then run
+    serially)."""
     import gaitopt.sweep as sweep_module
 
     real, calls = sweep_module.sweep, []
 
     def recording(task, points, **kwargs):
-        calls.append((task.__name__, len(points), kwargs["scheduler"]))
+        calls.append((task.__name__, len(points), kwargs["chunk"], kwargs["scheduler"]))
         return real(task, points, **{**kwargs, "scheduler": "serial"})
 
     monkeypatch.setattr(sweep_module, "sweep", recording)
     estimate = basin(wheel, chunk=1, scan=2, bisections=2, scheduler="tcp://127.0.0.1:8786")
-    assert calls == [("_rays_task", 2, "tcp://127.0.0.1:8786")]
+    assert calls == [("_rays_task", 2, 1, "tcp://127.0.0.1:8786")]
     assert estimate.success
     basin(wheel, scan=2, bisections=1)
-    assert calls[-1] == ("_rays_task", 1, "serial")  # default: serial, both rays in one chunk
+    assert calls[-1] == ("_rays_task", 2, 4, "serial")  # default: serial, chunk 4
 
 
 def test_classify_starts_reports_each_outcome(wheel):
