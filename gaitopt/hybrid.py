@@ -24,7 +24,7 @@ import numpy as np
 from .errors import FrozenModelError, StateError
 from .parameters import ParameterSpec, check_parameter, parameter_specs
 
-__all__ = ["Transition", "Constraint", "Phase", "Section", "HybridModel", "Symbols"]
+__all__ = ["Transition", "Constraint", "Phase", "Section", "Structure", "HybridModel", "Symbols"]
 
 
 @dataclass(frozen=True)
@@ -265,7 +265,10 @@ class Symbols:
 
 
 @dataclass(frozen=True)
-class _Structure:
+class Structure:
+    """A model class's hybrid structure (:meth:`HybridModel.structure`): its phases, in cycle
+    order starting with the one that holds the section, and its Poincaré section."""
+
     phases: tuple[Phase, ...]
     section: Section
 
@@ -338,7 +341,7 @@ class HybridModel:
     declared_states: ClassVar[tuple[str, ...]] = ()
     declared_coordinates: ClassVar[tuple[str, ...]] = ()
     declared_section_doc: ClassVar[str] = ""
-    _cache: ClassVar[dict[type, _Structure]] = {}
+    _cache: ClassVar[dict[type, Structure]] = {}
     _specs: ClassVar[dict[type, tuple[ParameterSpec, ...]]] = {}
 
     def __post_init__(self) -> None:
@@ -446,24 +449,26 @@ class HybridModel:
         return cls.declared_states, cls.declared_coordinates, cls.declared_section_doc
 
     @classmethod
-    def _structure(cls) -> _Structure:
+    def structure(cls) -> Structure:
+        """The class's phases and section (``.phases``, ``.section``), built once per class from
+        symbolic parameters by :meth:`build`, validated and cached; no model instance needed."""
         if cls not in HybridModel._cache:
             sym = Symbols(cls.parameter_specs(), cls.inputs)
             phases, section = cls.build(sym)
             _validate_structure(cls, tuple(phases), section)
             _check_declared(cls, tuple(phases), section)
-            HybridModel._cache[cls] = _Structure(tuple(phases), section)
+            HybridModel._cache[cls] = Structure(tuple(phases), section)
         return HybridModel._cache[cls]
 
     @property
     def phases(self) -> tuple[Phase, ...]:
         """The phases of one cycle, starting with the one that contains the section."""
-        return self._structure().phases
+        return self.structure().phases
 
     @property
     def section(self) -> Section:
         """The Poincaré section."""
-        return self._structure().section
+        return self.structure().section
 
     @property
     def state_names(self) -> tuple[str, ...]:

@@ -45,7 +45,7 @@ MODELS = list(gaitopt.REGISTRY)
 LINKAGES = list(getattr(importlib.import_module("gaitopt.linkage"), "LINKAGES", {}))
 PARAMETERS = sorted({s.name for c in gaitopt.REGISTRY.values() for s in c.parameter_specs()})
 STATES = sorted(
-    {n for c in gaitopt.REGISTRY.values() for p in c._structure().phases for n in p.states}
+    {n for c in gaitopt.REGISTRY.values() for p in c.structure().phases for n in p.states}
 )
 JUNK_NAMES = ["", " ", "walkr", "slop", "é", "名前", "x" * 300, "-", "--", "=", "None", "0"]
 NASTY = [

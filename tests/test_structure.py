@@ -55,7 +55,7 @@ def test_a_consistent_structure_builds():
 )
 def test_an_inconsistent_structure_is_refused_when_built(defect, match):
     with pytest.raises(ModelDefinitionError, match=match):
-        _ball(**defect)._structure()
+        _ball(**defect).structure()
 
 
 def test_every_registered_model_passes_the_structure_checks():

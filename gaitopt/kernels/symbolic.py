@@ -76,7 +76,7 @@ def kernel_functions(model_cls) -> list[ca.Function]:
         Where a model's functions cannot be evaluated on SX symbols (a model built from MX
         functions): the caller falls back to the shooting graph.
     """
-    structure = model_cls._structure()
+    structure = model_cls.structure()
     functions = [_lift(structure.section, len(model_cls.parameter_specs()))]
     for i, phase in enumerate(structure.phases):
         functions += [_fold(phase.flow, f"fold_{i}"), _end(phase, f"end_{i}")]

@@ -37,7 +37,7 @@ def _functions(model_cls) -> list[ca.Function]:
     from ..dop853 import step_function
 
     functions = []
-    for i, phase in enumerate(model_cls._structure().phases):
+    for i, phase in enumerate(model_cls.structure().phases):
         for constraints in (True, False):
             f = step_function(phase.flow, phase_events(phase, constraints), CHECKS_PER_STEP)
             args = f.mx_in()
@@ -55,6 +55,6 @@ def verification_steps(model_cls) -> dict[tuple[int, bool], ca.Function] | None:
         functions, _ = load(name, lambda: _functions(model_cls), key=source_key(name, model_cls))
     except (RuntimeError, TypeError, NotImplementedError):
         return None
-    n = len(model_cls._structure().phases)
+    n = len(model_cls.structure().phases)
     keys = [(i, constraints) for i in range(n) for constraints in (True, False)]
     return dict(zip(keys, functions, strict=True))

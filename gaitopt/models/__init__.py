@@ -113,7 +113,9 @@ def register(cls: type[HybridModel]) -> type[HybridModel]:
     Raises
     ------
     GaitoptInputError
-        If ``cls`` is not a :class:`~gaitopt.hybrid.HybridModel` subclass with a ``name``, or a
+        If ``cls`` is not a :class:`~gaitopt.hybrid.HybridModel` subclass with a ``name`` that
+        implements :meth:`~gaitopt.hybrid.HybridModel.build` and
+        :meth:`~gaitopt.hybrid.HybridModel.default_start`, or a
         *different* class is registered under that name (unregister the old one first: one
         meaning per name).
     """
@@ -123,6 +125,19 @@ def register(cls: type[HybridModel]) -> type[HybridModel]:
         raise GaitoptInputError(
             f"register: expected a HybridModel subclass with a `name`, got {cls!r}; see "
             f"docs/writing-a-model.md"
+        )
+    missing = [
+        name
+        for name in ("build", "default_start")
+        # a classmethod is a new bound method on each access: compare the functions under it
+        if getattr(getattr(cls, name), "__func__", getattr(cls, name))
+        is getattr(getattr(HybridModel, name), "__func__", getattr(HybridModel, name))
+    ]
+    if missing:
+        raise GaitoptInputError(
+            f"register: {cls.__qualname__} does not implement {' and '.join(missing)}, which "
+            f"every model must (the phases and section from symbols; a start on the section); "
+            f"see docs/writing-a-model.md"
         )
     taken = REGISTRY.get(cls.name)
     if taken is cls:

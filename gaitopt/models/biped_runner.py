@@ -118,6 +118,7 @@ def _step(sym: Symbols, leg: str, first: int) -> tuple[Phase, Phase, Phase]:
         velocity=(x_dot, z_dot),
         length=l0,
         angle=angle,
+        impact=False,  # a massless leg: the hip's velocity is only re-expressed
         doc=f"foot {L} reaches the ground: z − l_{leg}·cos θ_{leg} = 0, falling; the hip in "
         f"polar coordinates about foot {L}",
     )

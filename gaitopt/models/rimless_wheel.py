@@ -36,6 +36,7 @@ import casadi as ca
 import numpy as np
 
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
+from ..mechanics import bodies_function
 from ..parameters import gravity_parameter, parameter
 
 __all__ = ["RimlessWheel"]
@@ -135,6 +136,10 @@ class RimlessWheel(HybridModel):
             {"energy": energy},
             points=points,
             point_names=("hub", "foot", "next_foot", "previous_foot"),
+            # The wheel's mass at its hub (per unit mass, 1 kg: the map does not depend on it);
+            # the impact θ̇⁺ = cos 2α θ̇⁻ is the conservation of its angular momentum about the
+            # new foot (Coleman, Chatterjee & Ruina 1997).
+            bodies=bodies_function([(ca.DM(1.0), hub)], x, theta, theta_dot, sym.p),
         )
         s = ca.SX.sym("s", 1)
         section = Section(

@@ -89,6 +89,7 @@ def _build(sym: Symbols, angle_law) -> tuple[tuple[Phase, ...], Section]:
         velocity=(x_dot, z_dot),
         length=l0,
         angle=angle_law(z_dot),
+        impact=False,  # a massless leg: the hip's velocity is only re-expressed
         doc="foot reaches the ground: z − h − l0·cos θ_td = 0, falling; the hip in polar "
         "coordinates about the foot",
     )

@@ -376,7 +376,7 @@ class ThreeLinkWalker(HybridModel):
 
     # -- outputs of the closed loop ----------------------------------------------------------
     def _function(self, name: str) -> ca.Function:
-        self._structure()
+        self.structure()
         return _FUNCTIONS[type(self)][name]
 
     def torques(self, x: np.ndarray) -> np.ndarray:

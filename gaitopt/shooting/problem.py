@@ -103,7 +103,7 @@ class ShootingProblem(SymbolicShooting):
     """
 
     def __init__(self, model_cls: type[HybridModel], disc: MultipleShooting, cycles: int):
-        structure = model_cls._structure()
+        structure = model_cls.structure()
         self.model_cls = model_cls
         self.phases = structure.phases
         self.section = structure.section
