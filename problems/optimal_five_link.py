@@ -24,7 +24,7 @@ import matplotlib
 matplotlib.use("Agg")
 
 import gaitopt  # noqa: E402
-from gaitopt.cli.optimize import _write  # noqa: E402
+from gaitopt.cli.optimize_files import write_optimal  # noqa: E402
 from gaitopt.files import write_csv  # noqa: E402
 
 OPTIMTRAJ = {"GPOPS-IPOPT": 263.69884582, "GPOPS-SNOPT": 302.25469438}  # 8c43235 logs
@@ -59,7 +59,7 @@ def main(argv: list[str] | None = None) -> int:
               rows, folder / "minima.csv")  # fmt: skip
     report = gait.to_json(minima=True)
     report["time_s"] = elapsed
-    _write(gait, report, folder)
+    write_optimal(gait, report, folder)
     print(f"best {gait.cost:.10f}, discretisation error {gait.discretisation_error:.2g}, "
           f"verified {gait.verified}, {elapsed:.1f} s for {args.starts} starts")  # fmt: skip
     return 0 if gait.success else 1

@@ -68,11 +68,11 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from pathlib import Path
 from typing import Any
 
 from ..errors import GaitoptInputError, did_you_mean
 from .optimize_advice import for_the_cli
+from .optimize_files import write_optimal
 
 __all__ = ["add_arguments", "run", "HELP"]
 
@@ -389,7 +389,7 @@ def run(args: argparse.Namespace) -> int:
         else:
             report["stabilisation"] = {"success": False, "message": "no optimum to stabilise"}
             stabilised = False
-    lost = write_outputs(args.out, lambda folder: _write(gait, report, folder))
+    lost = write_outputs(args.out, lambda folder: write_optimal(gait, report, folder))
     if args.json:
         _print_json(report)
     else:
@@ -514,38 +514,3 @@ def _report_items(report: dict[str, Any], model: Any) -> list[Any]:
 def _count(things: list[Any], noun: str) -> str:
     """``"1 start"``, ``"2 starts"``."""
     return f"{len(things)} {noun}{'' if len(things) == 1 else 's'}"
-
-
-def _write(gait: Any, report: dict[str, Any], folder: Path) -> None:
-    """optimal.json, inputs.csv, orbit.png, inputs.png, gait.gif (each written atomically)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-
-    from ..animation import animate_walker
-    from ..files import write_csv, write_json
-    from ..optimize.verify import feedforward_of
-    from ..plotting import save_figure
-    from ..plotting.optimal import plot_optimal_inputs, plot_optimal_orbit
-    from ..simulation import simulate
-
-    folder.mkdir(parents=True, exist_ok=True)
-    write_json(report, folder / "optimal.json")
-    if not gait.inputs:
-        return
-    names = list(gait.model.inputs)
-    time = gait.inputs["time"]
-    rows = zip(time, *[gait.inputs[n] for n in names], strict=True)
-    unit = gait.model.time_unit  # "time_s"; "time_τ" in dimensionless time
-    write_csv([f"time_{unit}" if unit != "1" else "time", *names], rows, folder / "inputs.csv")
-    save_figure(plot_optimal_inputs(gait)[0], folder / "inputs.png")
-    if gait.orbit:
-        save_figure(plot_optimal_orbit(gait)[0], folder / "orbit.png")
-
-    if gait.success:
-        x0 = gait.model.state_vector(gait.fixed_point)
-        sim = simulate(
-            gait.model, x0, steps=3, feedforward=feedforward_of(gait.profiles), rtol=1e-10
-        )
-        if sim.success and all(ph.points is not None for ph in gait.model.phases):
-            animate_walker(gait.model, sim, folder / "gait.gif")
