@@ -282,8 +282,8 @@ def test_list_builds_no_model(capsys, monkeypatch):
         built.append(cls.__name__)
         raise AssertionError(f"gaitopt list built {cls.__name__}")
 
-    # _structure is where every build (cached or not) is reached: phases, section, state_names.
-    monkeypatch.setattr(HybridModel, "_structure", classmethod(no_build))
+    # structure() is where every build (cached or not) is reached: phases, section, state_names.
+    monkeypatch.setattr(HybridModel, "structure", classmethod(no_build))
     for cls in REGISTRY.values():
         monkeypatch.setattr(cls, "build", classmethod(no_build))
     for argv in (["list"], ["list", "--json"]):
