@@ -199,3 +199,32 @@ def test_both_halves_give_the_same_verdict_on_the_same_orbit(passive, optimum, c
         assert shooting is None
     else:
         assert expected in shooting
+
+
+def test_both_front_doors_return_gaits_with_one_status_table(passive, optimum):
+    # Source: gaitopt.result.STATUS, the one table of codes and advice. A limit cycle and an
+    # optimum are both gaitopt.Gait, with a status from it; a failed optimisation record too.
+    from gaitopt.optimize import OptimalGait
+    from gaitopt.result import STATUS
+
+    for gait in (passive, optimum):
+        assert isinstance(gait, gaitopt.Gait)
+        assert gait.status == "success" and gait.advice == STATUS["success"]
+    np.testing.assert_allclose(optimum.x, passive.x, atol=1e-8)  # same orbit (see above)
+    failed = OptimalGait(False, "no gait", passive.model, "effort")
+    assert failed.status == "not_converged" and failed.advice == STATUS["not_converged"]
+    with pytest.raises(ValueError, match="status 'lost' is not one of"):
+        OptimalGait(False, "", passive.model, "effort", status="lost")
+
+
+def test_a_refused_optimum_has_the_status_of_the_certificate(optimum):
+    # The trailing foot without lift-off (first test) through the optimiser's certification:
+    # status not_a_gait, the same code a shooting orbit refused by the certificate gets.
+    col, w = optimum.transcription
+    model = col.model
+    sol = col.unpack(w, model.p)
+    bad_w = np.array(w, dtype=float)
+    u0 = collocation_arcs(col, sol)[0].u[:, 0]
+    col.blocks.put(bad_w, "s", _without_lift_off(model, sol["s"], u0))
+    result = _certify(col.problem, col, bad_w, {}, verify=False)
+    assert not result.success and result.status == "not_a_gait"

@@ -95,9 +95,10 @@ def _certify(
             problem_msg = f"the power split is not complementary (p⁺p⁻ overlap {overlap:.2g} W)"
     if problem_msg is not None:
         result.message = "not a gait: " + problem_msg.removeprefix("no gait: ")
+        result.status = "not_a_gait"
         return result
     if not verify:
-        result.success = True
+        result.success, result.status = True, "success"
         result.message = "optimal gait found (not verified: verify=False)"
         return result
 
@@ -111,6 +112,7 @@ def _certify(
     )  # fmt: skip
     if verdict.simulation is None or not np.isfinite(verdict.return_error):
         result.message = "the optimum is not confirmed by simulation: " + verdict.message
+        result.status = "not_verified"
         return result
     result.verification = {
         "return_error": verdict.return_error,
@@ -128,8 +130,9 @@ def _certify(
     result.stable = is_stable(result.multipliers)
     if not result.verified:
         result.message = "the optimum is not confirmed by simulation: " + verdict.message
+        result.status = "not_verified"
         return result
-    result.success = True
+    result.success, result.status = True, "success"
     result.message = (
         f"optimal gait found (IPOPT {stats.get('return_status')}, {result.iterations} "
         f"iterations); {verdict.message}"

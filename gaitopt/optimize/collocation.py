@@ -646,7 +646,7 @@ class Collocation:
             return
         failure = self.check_limits(sol)
         if failure is not None:
-            result.success, result.stable = False, None
+            result.success, result.stable, result.status = False, None, "not_a_gait"
             result.message = "not a gait: " + failure
 
     def u_start_of(self, U: np.ndarray) -> np.ndarray:
