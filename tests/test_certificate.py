@@ -228,3 +228,21 @@ def test_a_refused_optimum_has_the_status_of_the_certificate(optimum):
     col.blocks.put(bad_w, "s", _without_lift_off(model, sol["s"], u0))
     result = _certify(col.problem, col, bad_w, {}, verify=False)
     assert not result.success and result.status == "not_a_gait"
+
+
+def test_both_halves_refuse_a_repeated_orbit_as_a_period_two_gait(passive, optimum):
+    # The certificate's minimal-period rule, now for optimised gaits too: the passive orbit
+    # twice (both transcriptions' samples) is the period-1 gait repeated, no period-2 gait
+    # (states at the second return equal to 1e-6; here identical by construction).
+    model = passive.model
+    problem = shooting_problem(type(model), passive.discretisation, 1)
+    col, w = optimum.transcription
+    sol = col.unpack(w, col.model.p)
+    verdicts = []
+    for arcs in (
+        shooting_arcs(model, problem, passive.orbit, passive.inputs),
+        collocation_arcs(col, sol),
+    ):
+        verdicts.append(certify_orbit(model, [*arcs, *arcs], model.p, steps=2))
+    assert verdicts[0] == verdicts[1]
+    assert verdicts[0].startswith("no period-2 gait here: the orbit found is the period-1 gait")

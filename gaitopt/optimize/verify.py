@@ -33,6 +33,14 @@ _SAMPLES = 24  # per mesh interval for the dense checks
 GUARD_TOL = 1e-6
 
 
+#: A period-k optimum that is a shorter orbit repeated is no period-k gait (the certificate's
+#: minimal-period rule, as for a shooting search); what to ask for instead.
+REPEATED_OPTIMUM = (
+    "the least-cost {steps}-step orbit is the {j}-step optimum repeated: optimise with "
+    "steps={j}, or try more `starts` for an orbit whose steps differ"
+)
+
+
 def dense_arcs(col: Collocation, sol: dict[str, Any], samples: int = _SAMPLES) -> list[DenseArc]:
     """The collocation orbit's dense samples as the certificate reads them: each phase's state
     and input polynomials at ``samples`` uniform samples per mesh interval (not the nodes, where
@@ -58,7 +66,10 @@ def check_dense(col: Collocation, sol: dict[str, Any]) -> str | None:
     ``c ≥ −1e-9 · (1 + max |c|)`` with an ``at_start`` one rising, the minimal period) on the
     collocation polynomials; else why."""
     arcs = dense_arcs(col, sol)
-    return certify_orbit(col.model, arcs, sol["p"], steps=col.problem.steps, guard_tol=GUARD_TOL)
+    return certify_orbit(
+        col.model, arcs, sol["p"], steps=col.problem.steps, guard_tol=GUARD_TOL,
+        repeated_advice=REPEATED_OPTIMUM,
+    )  # fmt: skip
 
 
 def profiles(col: Collocation, sol: dict[str, Any]) -> list[Any]:

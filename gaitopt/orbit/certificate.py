@@ -221,9 +221,17 @@ def check_constraints(model: HybridModel, arcs: Sequence[DenseArc], p: np.ndarra
     return None
 
 
-def check_minimal_period(model: HybridModel, arcs: Sequence[DenseArc], steps: int) -> str | None:
+#: What to try when a period-k orbit is a shorter one repeated (a shooting search; an
+#: optimisation says what it asks for instead).
+REPEATED_ADVICE = "try a guess on the period-{steps} orbit (past its period doubling)"
+
+
+def check_minimal_period(
+    model: HybridModel, arcs: Sequence[DenseArc], steps: int, advice: str = REPEATED_ADVICE
+) -> str | None:
     """A period-``steps`` orbit is not a period-``j`` one repeated (``j`` dividing ``steps``):
-    the state where step ``j + 1`` begins differs from the section state."""
+    the state where step ``j + 1`` begins differs from the section state (``advice``: what to
+    try, formatted with ``steps`` and ``j``)."""
     n_phases = len(model.phases)
     x0 = arcs[0].x[:, 0]
     for j in range(1, steps):
@@ -233,7 +241,7 @@ def check_minimal_period(model: HybridModel, arcs: Sequence[DenseArc], steps: in
         if np.max(np.abs(xj - x0)) < PERIOD_TOL * (1 + np.max(np.abs(x0))):
             return (
                 f"no period-{steps} gait here: the orbit found is the period-{j} gait repeated; "
-                f"try a guess on the period-{steps} orbit (past its period doubling)"
+                + advice.format(steps=steps, j=j)
             )
     return None
 
@@ -245,6 +253,7 @@ def certify_orbit(
     *,
     steps: int = 1,
     guard_tol: float = 1e-6,
+    repeated_advice: str = REPEATED_ADVICE,
 ) -> str | None:
     """Every check of the certificate, in order (see the module docstring): None if the sampled
     orbit is a gait, else the first failure in words.
@@ -262,13 +271,15 @@ def certify_orbit(
     guard_tol : float
         Relative tolerance of ``g = 0`` at each phase's end: the transcription's solve tolerance
         (the guard is one of its equations).
+    repeated_advice : str
+        What to try when the orbit is a shorter one repeated (``{steps}``, ``{j}`` filled in).
     """
     for check in (
         lambda: check_durations(arcs),
         lambda: check_phase_ends(model, arcs, p, guard_tol),
         lambda: check_early_crossings(model, arcs, p),
         lambda: check_constraints(model, arcs, p),
-        lambda: check_minimal_period(model, arcs, steps) if steps > 1 else None,
+        lambda: check_minimal_period(model, arcs, steps, repeated_advice) if steps > 1 else None,
     ):
         defect = check()
         if defect is not None:
