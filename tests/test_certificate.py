@@ -48,7 +48,7 @@ def optimum(passive) -> gaitopt.OptimalGait:
     legs = sum(passive.model.params[k] for k in ("a1", "b1", "a2", "b2"))
     step_length = 2 * legs * float(np.sin((x["q2"] - x["q1"]) / 2))
     # A coarse start mesh (4 intervals of degree 5, refined to 8) and tol 1e-6 keep the NLP
-    # small: this optimum only has to be the same orbit, which it is to 1e-8.
+    # small: this optimum only has to be the same orbit, which it is to 2e-8 (8.1e-9 measured).
     gait = gaitopt.optimize_gait(
         passive.model, "effort", period=passive.period, step_length=step_length,
         mesh=RadauMesh(4, 5), tol=1e-6,
@@ -188,10 +188,11 @@ def _no_lift_off(arcs, model):
 )
 def test_both_halves_give_the_same_verdict_on_the_same_orbit(passive, optimum, change, expected):
     # Source: two transcriptions of the kneed walker's passive gait (multiple shooting, RK4
-    # samples; Radau collocation, its polynomials) whose fixed points agree to 1e-8; the one
-    # certificate must accept both, and refuse both the same way after the same change.
+    # samples; Radau collocation, its polynomials) whose fixed points agree to 2e-8 (8.1e-9
+    # measured); the one certificate must accept both, and refuse both the same way after the
+    # same change.
     x_opt = [optimum.fixed_point[k] for k in passive.state_names]
-    np.testing.assert_allclose(x_opt, passive.x, atol=1e-8)
+    np.testing.assert_allclose(x_opt, passive.x, atol=2e-8)
     assert optimum.cost < 1e-12  # the passive gait: no torque (N²·m²·s)
     shooting, collocation = _verdicts(passive, optimum, change)
     assert _shape(shooting) == _shape(collocation)
@@ -210,7 +211,7 @@ def test_both_front_doors_return_gaits_with_one_status_table(passive, optimum):
     for gait in (passive, optimum):
         assert isinstance(gait, gaitopt.Gait)
         assert gait.status == "success" and gait.advice == STATUS["success"]
-    np.testing.assert_allclose(optimum.x, passive.x, atol=1e-8)  # same orbit (see above)
+    np.testing.assert_allclose(optimum.x, passive.x, atol=2e-8)  # same orbit (see above)
     failed = OptimalGait(False, "no gait", passive.model, "effort")
     assert failed.status == "not_converged" and failed.advice == STATUS["not_converged"]
     with pytest.raises(ValueError, match="status 'lost' is not one of"):
