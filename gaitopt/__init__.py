@@ -23,7 +23,7 @@ from .errors import (
 )
 from .hybrid import Constraint, HybridModel, Phase, Section, Transition
 from .models import REGISTRY, model, register, unregister
-from .result import LimitCycle, OrbitArc
+from .result import Gait, LimitCycle, OrbitArc
 from .shooting import MultipleShooting, ShootingProblem, find_limit_cycle
 from .simulation import Simulation, simulate
 
@@ -42,6 +42,7 @@ __all__ = [
     "SpecialPoint",
     "MultipleShooting",
     "ShootingProblem",
+    "Gait",
     "LimitCycle",
     "OrbitArc",
     "simulate",

@@ -81,10 +81,11 @@ class Constraint:
 
     A gait must satisfy every constraint its model declares: a swing foot above the ground, a
     trailing foot that lifts off after heel strike, a leg that pushes rather than pulls, a ball
-    above its paddle.  The checks are made three times, independently: by
-    :func:`gaitopt.shooting.certify` on the orbit's dense samples, by the verification simulation
-    (where ``c`` falling through zero ends the motion as the event :attr:`outcome`), and so by
-    continuation, which reports a ``boundary`` special point where a constraint becomes active.
+    above its paddle.  The checks are made three times, independently: by the certificate of
+    both front doors (:mod:`gaitopt.orbit.certificate`) on the orbit's dense samples, by the
+    verification simulation (where ``c`` falling through zero ends the motion as the event
+    :attr:`outcome`), and so by continuation, which reports a ``boundary`` special point where a
+    constraint becomes active.
 
     Attributes
     ----------

@@ -1,4 +1,6 @@
-"""The result of :func:`gaitopt.find_limit_cycle`."""
+"""The results of both front doors: :class:`Gait`, the interface every gait result has, with
+its one :data:`STATUS` table; :class:`LimitCycle` (:func:`gaitopt.find_limit_cycle`) and
+:class:`gaitopt.optimize.OptimalGait` (:func:`gaitopt.optimize_gait`) are gaits."""
 
 from __future__ import annotations
 
@@ -7,28 +9,64 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["LimitCycle", "OrbitArc", "STATUS"]
+__all__ = ["Gait", "LimitCycle", "OrbitArc", "STATUS"]
 
-#: What a search ended in (``LimitCycle.status``), and what to try next (diffrax's ``RESULTS``,
-#: SciPy's ``OptimizeResult.status``): one code per way of failing; the message has the details.
+#: What a search or an optimisation ended in (``Gait.status``: :attr:`LimitCycle.status`,
+#: :attr:`OptimalGait.status`), and what to try next (diffrax's ``RESULTS``, SciPy's
+#: ``OptimizeResult.status``): one code per way of failing; the message has the details.
 STATUS = {
     "success": "a certified gait: solved, refined, checked on dense samples and verified",
-    "no_start": "the simulation from the guess never completes a step: try another guess "
-    "(`gaitopt simulate`), or the gait may not exist at these parameters",
+    "no_start": "the simulation from the guess never completes a step (an optimisation: no "
+    "start is a state of the model): try another guess (`gaitopt simulate`) or seed, or the "
+    "gait may not exist at these parameters",
     "not_converged": "Newton/IPOPT did not converge: try a closer guess, `--starts 16`, the "
-    "ipopt method, or follow the gait from parameters where it exists (`gaitopt continue`)",
+    "ipopt method, or follow the gait from parameters where it exists (`gaitopt continue`); "
+    "an optimisation: relax the constraint its message names (a larger input bound, a shorter "
+    "step, a longer period) or try more starts",
     "singular": "the orbit is not isolated (a continuous family, or not transversal to a "
     "guard): change the parameter that removes the restoring term",
     "discretisation": "the orbit's discretisation error stays above `tol` at the finest mesh: "
-    "loosen `tol`",
+    "loosen `tol` (an optimum: or bound the inputs so that it is smoother)",
     "standing": "the solution is an equilibrium, not a gait: give the guess more speed, or "
     "the gait may not exist (a passive walker needs a slope)",
     "not_a_gait": "the orbit breaks a physical condition (a negative duration, a guard reached "
     "the wrong way or crossed early, a foot through the ground, a leg that pulls) or repeats a "
     "shorter one: the gait does not exist with this phase sequence here",
-    "not_verified": "the independent simulation does not confirm the orbit: tighten the mesh "
-    "or `tol`, or the gait is too sensitive to be trusted here",
+    "not_verified": "the independent simulation does not confirm the orbit (its return, its "
+    "phase timing or an optimum's cost): tighten the mesh or `tol`, or the gait is too "
+    "sensitive to be trusted here",
 }
+
+
+class Gait:
+    """What every gait result is, whichever front door found it: a :class:`LimitCycle`
+    (:func:`gaitopt.find_limit_cycle`, multiple shooting) or an
+    :class:`~gaitopt.optimize.OptimalGait` (:func:`gaitopt.optimize_gait`, collocation).
+
+    Both were judged by the same certificate and referee (:mod:`gaitopt.orbit`) and share these
+    attributes: ``success``, ``message``, ``status`` (a code of :data:`STATUS`), ``model``,
+    ``period`` (s), ``fixed_point`` (state name → value on the section), ``durations`` (s),
+    ``multipliers``, ``stable``, ``verified`` and ``orbit`` (dense samples per phase).  An
+    optimal gait adds its ``cost``, its input ``profiles`` and, from a multi-start, its
+    ``minima``.
+    """
+
+    __slots__ = ()
+
+    @property
+    def x(self) -> np.ndarray:
+        """The fixed point as a vector (the model's state order)."""
+        return np.array([self.fixed_point[k] for k in self.model.state_names])
+
+    @property
+    def section_point(self) -> np.ndarray:
+        """The fixed point in section coordinates."""
+        return np.array([self.fixed_point[k] for k in self.model.section.coordinates])
+
+    @property
+    def advice(self) -> str:
+        """What :data:`STATUS` says about :attr:`status`: what it means and what to try."""
+        return STATUS.get(self.status, "")
 
 
 @dataclass
@@ -60,7 +98,7 @@ class OrbitArc:
 
 
 @dataclass
-class LimitCycle:
+class LimitCycle(Gait):
     """A periodic orbit (gait) of a hybrid model, or the record of a failed search.
 
     Attributes
@@ -170,6 +208,11 @@ class LimitCycle:
     def section_point(self) -> np.ndarray:
         """The fixed point in section coordinates."""
         return np.array([self.fixed_point[k] for k in self.section_coordinates])
+
+    @property
+    def advice(self) -> str:
+        """What :data:`STATUS` says about this search's status and what to try next."""
+        return STATUS.get(self.status or ("success" if self.success else "not_converged"), "")
 
     def as_dict(self, timing: bool = True) -> dict[str, Any]:
         """The JSON object of ``gaitopt solve --json`` (the public contract in the README).

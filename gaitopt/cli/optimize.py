@@ -372,7 +372,7 @@ def run(args: argparse.Namespace) -> int:
             raise
         raise InputError(f"--scheduler {args.scheduler}: cannot reach it ({exc})") from None
     report = gait.to_json(minima=args.starts > 1)
-    if getattr(gait, "active_spans", None) is not None:  # when the state bounds and limits bind
+    if gait.active_spans is not None:  # when the state bounds and limits bind
         report["active_spans"] = gait.active_spans
     report["message"] = for_the_cli(report["message"])
     for entry in (*report.get("minima", ()), *report.get("starts", ())):

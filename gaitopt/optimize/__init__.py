@@ -4,8 +4,10 @@
   bounds, free parameters);
 * :mod:`~gaitopt.optimize.collocation` — its Legendre–Gauss–Radau transcription;
 * :mod:`~gaitopt.optimize.solve` — IPOPT with exact derivatives, multi-start, mesh refinement;
-* :mod:`~gaitopt.optimize.verify` and :mod:`~gaitopt.optimize.floquet` — trust: dense checks,
-  independent simulation, multipliers two ways;
+* :mod:`~gaitopt.optimize.verify`, :mod:`~gaitopt.optimize.certify` and
+  :mod:`~gaitopt.optimize.floquet` — trust: the common certificate and referee of
+  :mod:`gaitopt.orbit` on the collocation polynomials and the input profile, multipliers two
+  ways;
 * :mod:`~gaitopt.optimize.result` — :class:`OptimalGait` (with every distinct minimum of a
   multi-start, :class:`Minimum`, and every start's outcome, :class:`StartRecord`);
 * :mod:`~gaitopt.optimize.guess` — the starts, and :class:`WarmStartError` for a ``guess`` that

@@ -1,6 +1,9 @@
 """An optimum solved to its tolerance becomes an :class:`OptimalGait` only if it passes every check:
-dense samples of guards and constraints, the independent simulation with its input profile, the
-same cost in simulation, and its Floquet multipliers by AD and by finite differences.  A
+the certificate the shooting uses too (:mod:`gaitopt.orbit.certificate`, on the collocation
+polynomials: guards, directions, admissibility, unilateral constraints with their one rule, the
+minimal period), the common referee (:mod:`gaitopt.orbit.referee`: the simulation with the input
+profile as a feedforward returns, with the same phase timing and the same cost), and its Floquet
+multipliers by AD and by finite differences.  A
 least-effort optimum solved with the arcs of its input bounds says in its message where each
 input sits at its bound (``at the bound: hip_torque = -4 on [0, 0.407938] s, …``)."""
 
@@ -10,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from ..orbit.referee import TIGHT, referee
 from ..result import OrbitArc
 from ..stability import is_stable
 from .active import _active
@@ -20,11 +24,14 @@ from .problem import GaitProblem
 from .result import OptimalGait
 from .verify import (
     check_dense,
+    feedforward_of,
     map_jacobian_fd,
     profiles,
-    simulate_gait,
     simulated_cost,
 )
+
+#: The simulated return must be the fixed point to this, relative to ``1 + max |x*|``.
+RETURN_TOL = 1e-6
 
 
 def _certify(
@@ -87,33 +94,33 @@ def _certify(
         if overlap > 1e-6:
             problem_msg = f"the power split is not complementary (p⁺p⁻ overlap {overlap:.2g} W)"
     if problem_msg is not None:
-        result.message = "not a gait: " + problem_msg
+        result.message = "not a gait: " + problem_msg.removeprefix("no gait: ")
+        result.status = "not_a_gait"
         return result
     if not verify:
-        result.success = True
+        result.success, result.status = True, "success"
         result.message = "optimal gait found (not verified: verify=False)"
         return result
 
-    sim = simulate_gait(problem, gait_model, x_star, profs, problem.steps)
-    if not sim.success or len(sim.arcs) != len(col.chain):
-        result.message = (
-            "the optimum is not confirmed by simulation: "
-            + (sim.message if not sim.success else f"{len(sim.arcs)} phases instead of "
-               f"{len(col.chain)}")
-        )  # fmt: skip
+    # The common referee: the feedforward simulation must return, keep the phase timing and
+    # cost the same (at the tight tolerances: its return error and cost are reported figures).
+    verdict = referee(
+        gait_model, x_star, np.asarray(sol["T"], dtype=float), problem.steps, tol=RETURN_TOL,
+        feedforward=feedforward_of(profs), max_phase_time=problem.max_phase_time,
+        cost=(float(sol["cost"]), lambda sim: simulated_cost(problem, gait_model, sim, profs)),
+        tolerances=(TIGHT,),
+    )  # fmt: skip
+    if verdict.simulation is None or not np.isfinite(verdict.return_error):
+        result.message = "the optimum is not confirmed by simulation: " + verdict.message
+        result.status = "not_verified"
         return result
-    error = float(np.max(np.abs(sim.section_states[-1] - x_star)))
-    sim_cost = simulated_cost(problem, gait_model, sim, profs)
-    cost_error = abs(sim_cost - sol["cost"]) / max(abs(sol["cost"]), 1e-300)
-    cost_ok = abs(sim_cost - sol["cost"]) <= 1e-6 * abs(sol["cost"]) + 1e-12
-    state_ok = error <= 1e-6 * (1 + float(np.max(np.abs(x_star))))
     result.verification = {
-        "return_error": error,
-        "cost_simulated": sim_cost,
-        "cost_error": cost_error if sol["cost"] != 0 else abs(sim_cost),
-        "period_simulated": float(sim.section_times[-1]),
+        "return_error": verdict.return_error,
+        "cost_simulated": verdict.cost_simulated,
+        "cost_error": verdict.cost_error,
+        "period_simulated": verdict.period_simulated,
     }
-    result.verified = bool(state_ok and cost_ok)
+    result.verified = bool(verdict.ok)
 
     A = return_map_jacobian(col, w, p)
     result.multipliers = multipliers_of(A)
@@ -122,16 +129,13 @@ def _certify(
         result.multipliers_fd = multipliers_of(A_fd)
     result.stable = is_stable(result.multipliers)
     if not result.verified:
-        result.message = (
-            f"the optimum is not confirmed by simulation: it returns {error:.3g} away and costs "
-            f"{sim_cost:.10g} against {sol['cost']:.10g}"
-        )
+        result.message = "the optimum is not confirmed by simulation: " + verdict.message
+        result.status = "not_verified"
         return result
-    result.success = True
+    result.success, result.status = True, "success"
     result.message = (
         f"optimal gait found (IPOPT {stats.get('return_status')}, {result.iterations} "
-        f"iterations); verified by simulation: return error {error:.2g}, cost "
-        f"{sim_cost:.10g} simulated"
+        f"iterations); {verdict.message}"
     )
     spans = saturated_spans(col, w, p)
     if spans:  # the arcs of active input bounds (least effort), with their junction times

@@ -57,6 +57,7 @@ import numpy as np
 
 from ..errors import GaitoptInputError
 from ..hybrid import rate_along
+from ..orbit.certificate import CONSTRAINT_TOL
 from .problem import GaitProblem
 from .radau import (
     COAST,
@@ -77,8 +78,9 @@ __all__ = ["RadauMesh", "Collocation", "lagrange_matrix", "Group", "Arc"]
 #: (:meth:`Collocation.check_limits`): not the nodes, where they are imposed.
 LIMIT_SAMPLES = 64
 #: A state bound or limit counts as violated on the dense samples where
-#: ``c < −LIMIT_TOL · (1 + max |c|)``: the rule of :func:`gaitopt.shooting.certify`.
-LIMIT_TOL = 1e-9
+#: ``c < −LIMIT_TOL · (1 + max |c|)``: the certificate's one rule for unilateral constraints
+#: (:data:`gaitopt.orbit.certificate.CONSTRAINT_TOL`).
+LIMIT_TOL = CONSTRAINT_TOL
 
 
 def _implicit_dynamics(model: Any) -> ca.Function | None:
@@ -276,7 +278,7 @@ class Collocation:
                 )
             u_start = ca.mtimes(Uk[:, :d], ca.DM(self.u_at_start))
             margin, margin0 = self._clearance_margin(T, hs, k)
-            for c in getattr(phase, "constraints", ()):
+            for c in phase.constraints:
                 nodes = Xk[:, 1:-1] if c.at_end else Xk[:, 1:]
                 unodes = Uk[:, :-1] if c.at_end else Uk
                 # A length (a foot's height) keeps the problem's clearance margin.
@@ -644,7 +646,7 @@ class Collocation:
             return
         failure = self.check_limits(sol)
         if failure is not None:
-            result.success, result.stable = False, None
+            result.success, result.stable, result.status = False, None, "not_a_gait"
             result.message = "not a gait: " + failure
 
     def u_start_of(self, U: np.ndarray) -> np.ndarray:

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from ..files import jsonable
+from ..result import STATUS, Gait
 
 __all__ = ["OptimalGait", "Minimum", "StartRecord", "START_STATUS"]
 
@@ -111,8 +112,10 @@ class StartRecord:
 
 
 @dataclass
-class OptimalGait:
-    """An optimal gait, or the record of a failed optimisation.
+class OptimalGait(Gait):
+    """An optimal gait, or the record of a failed optimisation: a :class:`gaitopt.Gait`, judged
+    by the same certificate and referee as a :class:`gaitopt.LimitCycle`, with the same
+    :data:`gaitopt.result.STATUS` codes.
 
     Attributes
     ----------
@@ -167,6 +170,23 @@ class OptimalGait:
         Wall-clock time (s).
     iterations : int
         IPOPT iterations of the final solve.
+    problem : dict
+        The statement solved (:meth:`GaitProblem.describe`).
+    orbit : list of OrbitArc
+        Dense samples of each phase of the orbit (with the input ``u`` at each sample).
+    status : str
+        One of :data:`gaitopt.result.STATUS`'s codes, as for a :class:`~gaitopt.LimitCycle`:
+        ``"success"``, ``"no_start"`` (no start is a state of the model), ``"not_converged"``
+        (IPOPT stopped; the message names the worst constraint), ``"not_a_gait"`` (the
+        certificate refuses it), ``"not_verified"`` (the referee does not confirm it) or
+        ``"discretisation"`` (the refinement did not reach ``tol``); :attr:`advice` says what
+        to try.
+    transcription : tuple or None
+        ``(Collocation, w)``: the final transcription and its solution (the stabilising design
+        differentiates it); None where no optimum was reached.
+    active_spans : dict or None
+        With state bounds or path constraints: the node-time spans where each is active
+        (the CLI's JSON ``active_spans``); None without them.
     """
 
     success: bool
@@ -196,6 +216,20 @@ class OptimalGait:
     iterations: int = 0
     problem: dict[str, Any] = field(default_factory=dict)
     orbit: list[Any] = field(default_factory=list)
+    status: str = ""
+    transcription: Any = field(default=None, repr=False, compare=False)
+    active_spans: dict[str, Any] | None = None
+
+    def __post_init__(self) -> None:
+        if self.status and self.status not in STATUS:
+            raise ValueError(f"OptimalGait: status {self.status!r} is not one of {list(STATUS)}")
+        if not self.status:
+            self.status = "success" if self.success else "not_converged"
+
+    @property
+    def x(self) -> np.ndarray:
+        """The fixed point as a vector (the model's state order)."""
+        return np.array([self.fixed_point[k] for k in self.model.state_names])
 
     def __bool__(self) -> bool:
         return self.success

@@ -330,6 +330,7 @@ def solve_problem(
                 False,
                 f"no start could begin: {'; '.join(r['reason'] for r in runs)}; try other starts "
                 f"(another seed) or parameters where the model's default start is a state",
+                status="no_start",
                 solve_time=time.perf_counter() - t_start,
                 starts=records,
                 **common,
@@ -347,6 +348,7 @@ def solve_problem(
             f"no gait meets the constraints: IPOPT stopped ({best['stats'].get('return_status')})"
             f" with the constraint '{name}' violated by {size:.3g}{bound_note}; relax it "
             f"(a larger input bound, a shorter step, a longer period){tally}",
+            status="not_converged",
             solve_time=time.perf_counter() - t_start,
             iterations=int(best["stats"].get("iter_count", 0)),
             starts=records,
@@ -422,7 +424,7 @@ def _finish(
             structure,
         )
         w_exact, stats_exact = _run(exact, exact.from_solution(col, w, p), p)
-        previous = structure_of(*getattr(guess, "transcription", (None, None)))
+        previous = structure_of(*(getattr(guess, "transcription", None) or (None, None)))
         if (
             not _converged(stats_exact)
             and previous
@@ -442,6 +444,7 @@ def _finish(
                 f"the exact positive-work transcription (arcs {_describe(structure)}) did not "
                 f"converge from the slack solution ({stats_exact.get('return_status')}); try "
                 f"more starts or other bounds",
+                status="not_converged",
                 solve_time=time.perf_counter() - t_start,
                 **common,
             )
@@ -487,7 +490,7 @@ def _finish(
     result = _certify(problem, col, w, stats, verify=verify)
     col.certify_limits(w, result)  # state bounds and path constraints: dense check, where active
     # The final transcription and its solution (the stabilising design differentiates it).
-    result.transcription = (col, w)  # type: ignore[attr-defined]
+    result.transcription = (col, w)
     result.discretisation_error = disc_error if np.isfinite(disc_error) else None
     result.discretisation = {
         "intervals": col.N,
@@ -498,7 +501,7 @@ def _finish(
     result.message += structure_note
     if result.success and not disc_error <= tol:
         # Never a gait known less well than promised: the refinement did not reach ``tol``.
-        result.success, result.stable = False, None
+        result.success, result.stable, result.status = False, None, "discretisation"
         result.message = (
             f"no certified optimum: the discretisation error {disc_error:.2g} (cost and orbit "
             f"under mesh refinement) stays above the target {tol:g} after {refinements} "

@@ -1,12 +1,12 @@
 """Trust in an optimal gait: dense checks of the transcription, independent simulation.
 
-* :func:`check_dense` samples each phase's collocation polynomials: no transition guard is
-  crossed (admissibly, in its direction) before the phase ends, and the model's unilateral
-  constraints hold between the nodes.
-* :func:`simulate_gait` re-simulates the gait with :func:`gaitopt.simulate` (adaptive DOP853 with
+* :func:`check_dense` samples each phase's collocation polynomials (:func:`dense_arcs`) and
+  applies the certificate the shooting uses too (:mod:`gaitopt.orbit.certificate`).
+* :func:`simulate_gait` simulates the gait with :func:`gaitopt.simulate` (adaptive DOP853 with
   located events: independent of the collocation) with the optimal input as a feedforward
-  ``u(t)`` in the time since the section; the return must be the fixed point and the cost,
-  computed by Gauss–Legendre quadrature of the simulated trajectory, the optimal cost.
+  ``u(t)`` in the time since the section; :func:`simulated_cost` is the cost of a simulation by
+  Gauss–Legendre quadrature.  The referee of :mod:`gaitopt.orbit.referee` (return, timing,
+  cost) uses both.
 * :func:`map_jacobian_fd`: the return map's Jacobian by central differences of that simulated
   map, the check of :func:`gaitopt.optimize.floquet.return_map_jacobian`.
 """
@@ -19,45 +19,57 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..orbit.certificate import DenseArc, certify_orbit
 from ..simulation import Simulation, simulate
 from .collocation import Collocation
 from .problem import GaitProblem
 
-__all__ = ["check_dense", "simulate_gait", "simulated_cost", "map_jacobian_fd"]
+__all__ = ["check_dense", "dense_arcs", "simulate_gait", "simulated_cost", "map_jacobian_fd"]
 
 _SAMPLES = 24  # per mesh interval for the dense checks
 
+#: The guard at each phase's last node is one of the NLP's equalities (IPOPT's
+#: ``constr_viol_tol`` 1e-11); the certificate re-reads it to this relative tolerance.
+GUARD_TOL = 1e-6
+
+
+#: A period-k optimum that is a shorter orbit repeated is no period-k gait (the certificate's
+#: minimal-period rule, as for a shooting search); what to ask for instead.
+REPEATED_OPTIMUM = (
+    "the least-cost {steps}-step orbit is the {j}-step optimum repeated: optimise with "
+    "steps={j}, or try more `starts` for an orbit whose steps differ"
+)
+
+
+def dense_arcs(col: Collocation, sol: dict[str, Any], samples: int = _SAMPLES) -> list[DenseArc]:
+    """The collocation orbit's dense samples as the certificate reads them: each phase's state
+    and input polynomials at ``samples`` uniform samples per mesh interval (not the nodes, where
+    the NLP imposes its equations), times in s since the orbit's section."""
+    model = col.model
+    tn = np.linspace(0.0, 1.0, col.N * samples + 1)
+    n_cycle = len(model.phases)
+    out, t0 = [], 0.0
+    for k, i in enumerate(col.chain):
+        X, U = col.evaluate(sol["X"][k], sol["U"][k], tn, sol["breaks"][k])
+        T = float(sol["T"][k])
+        step = f" (step {k // n_cycle + 1})" if len(col.chain) > n_cycle else ""
+        label = f"phase '{model.phases[i].name}'{step}"
+        out.append(DenseArc(i, label, T, t0 + tn * T, X, U))
+        t0 += T
+    return out
+
 
 def check_dense(col: Collocation, sol: dict[str, Any]) -> str | None:
-    """None if the sampled orbit crosses no guard early and meets every constraint; else why."""
-    model, p = col.model, sol["p"]
-    tn = np.linspace(0.0, 1.0, col.N * _SAMPLES + 1)
-    for k, i in enumerate(col.chain):
-        phase = model.phases[i]
-        X, U = col.evaluate(sol["X"][k], sol["U"][k], tn, sol["breaks"][k])
-        K = tn.size
-        for j, tr in enumerate(phase.transitions):
-            g = tr.direction * np.asarray(tr.guard.map(K)(X, U, p), dtype=float).ravel()
-            a = (
-                np.asarray(tr.admissible.map(K)(X, U, p), dtype=float).ravel()
-                if tr.admissible is not None
-                else np.ones(K)
-            )
-            scale = 1e-9 * (1 + np.max(np.abs(g)))
-            armed = np.maximum.accumulate(g < -scale)
-            last = K - 1 if j == 0 else K
-            for idx in range(1, last):
-                if armed[idx - 1] and g[idx - 1] < 0 <= g[idx] and (a[idx - 1] > 0 or a[idx] > 0):
-                    return (
-                        f"the orbit crosses '{tr.name}' inside phase '{phase.name}' at "
-                        f"{tn[idx] * sol['T'][k]:.4g} s, before the phase ends"
-                    )
-        for c in getattr(phase, "constraints", ()):
-            values = np.asarray(c.function.map(K)(X, U, p), dtype=float).ravel()
-            inner = values[1 if c.at_start else 0 : K - 1 if c.at_end else K]
-            if inner.size and np.min(inner) < -1e-6 * (1 + np.max(np.abs(values))):
-                return f"'{c.name}' fails between the nodes of phase '{phase.name}' ({c.outcome})"
-    return None
+    """None if the sampled orbit is a gait by the common certificate
+    (:func:`gaitopt.orbit.certify_orbit`: positive durations, each phase ending on its guard in
+    its direction and admissibly, no guard crossed early, every declared unilateral constraint
+    ``c ≥ −1e-9 · (1 + max |c|)`` with an ``at_start`` one rising, the minimal period) on the
+    collocation polynomials; else why."""
+    arcs = dense_arcs(col, sol)
+    return certify_orbit(
+        col.model, arcs, sol["p"], steps=col.problem.steps, guard_tol=GUARD_TOL,
+        repeated_advice=REPEATED_OPTIMUM,
+    )  # fmt: skip
 
 
 def profiles(col: Collocation, sol: dict[str, Any]) -> list[Any]:

@@ -6,8 +6,9 @@ The problem and the methods are separate modules:
   :class:`ShootingProblem` (unknowns, residual, Jacobians, bounds, objective slot, and the map
   back to phases and orbits);
 * :mod:`~gaitopt.shooting.newton` — Newton and IPOPT on a problem;
-* :mod:`~gaitopt.shooting.certify` — the checks that make a solution a gait, and its multipliers;
-* :mod:`~gaitopt.shooting.verify` — the independent simulation;
+* :mod:`~gaitopt.shooting.certify` — the checks that make a solution a gait (the common
+  certificate of :mod:`gaitopt.orbit` on the RK samples), and its multipliers;
+* :mod:`~gaitopt.shooting.verify` — the independent simulation (the common referee);
 * :mod:`~gaitopt.shooting.gait` — the direct solve from a guess (:func:`solve_gait` on the
   unknowns), below the homotopy and multi-start of :mod:`gaitopt.homotopy`;
 * :mod:`~gaitopt.shooting.find` — :func:`find_limit_cycle`, which puts them together, and

@@ -1,7 +1,9 @@
-"""Certify a solution of the shooting equations ("never a false gait"): durations positive,
-each phase ending on its guard admissibly and in its direction, no guard crossed earlier and every
-unilateral constraint holding on dense samples, the minimal period, and the independent simulation
-(:mod:`gaitopt.shooting.verify`); then the Floquet multipliers."""
+"""Certify a solution of the shooting equations ("never a false gait"): the common certificate
+(:mod:`gaitopt.orbit.certificate`: durations positive, each phase ending on its guard admissibly
+and in its direction, no guard crossed earlier, every unilateral constraint holding on dense
+samples, the minimal period) on the RK integrator's dense samples, the section's consistency, and
+the common referee (:mod:`gaitopt.orbit.referee`, through :mod:`gaitopt.shooting.verify`); then
+the Floquet multipliers.  :func:`gaitopt.optimize_gait` uses the same certificate and referee."""
 
 from __future__ import annotations
 
@@ -11,12 +13,20 @@ from typing import Any
 import numpy as np
 
 from ..hybrid import HybridModel
-from ..result import LimitCycle
+from ..orbit.certificate import (
+    DenseArc,
+    certify_orbit,
+    check_durations,
+    check_early_crossings,
+    constant_input,
+)
+from ..orbit.certificate import check_constraints as _check_constraints
+from ..result import LimitCycle, OrbitArc
 from ..stability import is_stable, section_jacobians
 from .problem import ShootingProblem
 from .verify import verify_by_simulation
 
-__all__ = ["certify", "check_constraints"]
+__all__ = ["certify", "check_constraints", "dense_arcs"]
 
 
 def certify(
@@ -69,7 +79,6 @@ def certify(
         linearisation = (problem.map_jacobian(ev.F_w), ev.F_u, ev.F, ev.x_return)
     J_w, J_u, F, x_return = (np.asarray(v, dtype=float) for v in linearisation)
     residual = float(np.max(np.abs(F))) if np.all(np.isfinite(F)) else float("inf")
-    ends, dg, adm = ev.ends, ev.rates, ev.admissible
     durations = np.asarray(ev.durations, dtype=float).ravel()
     x_star = model.lift(w[: problem.m])
     steps = problem.cycles
@@ -99,17 +108,12 @@ def certify(
             **extra,
         )  # fmt: skip
 
-    # -- no false gaits ----------------------------------------------------------------------
-    defect = _check_orbit(
-        model, problem, w, u, p, ends, dg.ravel(), adm.ravel(), durations, x_return, x_star
-    )
+    # -- no false gaits: the common certificate on the RK integrator's dense samples ---------
     orbit = problem.orbit(w, u, p)
+    arcs = dense_arcs(model, problem, orbit, u, durations, ev.ends)
+    defect = check_durations(arcs) or _check_section(x_return, x_star)
     if defect is None:
-        defect = _check_dense(model, problem, orbit, u, p)
-    if defect is None:
-        defect = check_constraints(model, problem, orbit, u, p)
-    if defect is None and steps > 1:
-        defect = _check_minimal_period(model, problem, w, steps)
+        defect = certify_orbit(model, arcs, p, steps=steps, guard_tol=max(tol * 1e3, 1e-8))
     if defect is not None:
         return fail(defect, "not_a_gait", orbit=orbit)
 
@@ -159,28 +163,35 @@ def _phase_label(model: HybridModel, problem: ShootingProblem, k: int) -> str:
     return f"phase '{name}'{step}"
 
 
-def _check_orbit(model, problem, w, u, p, ends, dg, adm, durations, x_return, x_star) -> str | None:
-    """Durations positive; each phase ends on its guard, admissibly and in the stated direction."""
-    for k, i in enumerate(problem.chain):
-        phase = model.phases[i]
-        transition = phase.transitions[0]
-        label = _phase_label(model, problem, k)
-        if not durations[k] > 0:
-            return (
-                f"no gait: {label} would last {durations[k]:.3g} s (durations must be positive); "
-                f"the orbit through this guess runs backwards in time — the gait may not exist "
-                f"at these parameters"
+def dense_arcs(
+    model: HybridModel,
+    problem: ShootingProblem,
+    orbit: list[OrbitArc],
+    u: np.ndarray,
+    durations: np.ndarray | None = None,
+    ends: list[np.ndarray] | None = None,
+) -> list[DenseArc]:
+    """The shooting orbit's dense samples (the RK integrator's, :meth:`ShootingProblem.orbit`)
+    as the certificate reads them: the per-step input held at every sample; ``durations`` the
+    shooting's (default: each arc's time span), ``ends`` its solved phase-end states (default:
+    the last samples, which a finer sampling integration puts off the solved ends by the
+    discretisation error)."""
+    out = []
+    for k, arc in enumerate(orbit):
+        K = arc.x.shape[1]
+        duration = float(arc.t[-1] - arc.t[0]) if durations is None else float(durations[k])
+        out.append(
+            DenseArc(
+                arc.phase, _phase_label(model, problem, k), duration, np.asarray(arc.t),
+                np.asarray(arc.x, dtype=float), constant_input(u, K),
+                None if ends is None else np.asarray(ends[k], dtype=float),
             )
-        if not adm[k] > 0:
-            return (
-                f"no gait: {label} ends on '{transition.name}' where that crossing is excluded "
-                f"(spurious crossing rule: {transition.doc})"
-            )
-        if not transition.direction * dg[k] > 0:
-            return (
-                f"no gait: {label} reaches '{transition.name}' in the wrong direction "
-                f"(grazing or from the other side)"
-            )
+        )  # fmt: skip
+    return out
+
+
+def _check_section(x_return, x_star) -> str | None:
+    """The return state lies where the section's lift puts it (the model's own consistency)."""
     error = float(np.max(np.abs(np.asarray(x_return).ravel() - x_star)))
     if error > 1e-8 * (1 + np.max(np.abs(x_star))):
         return (
@@ -191,88 +202,15 @@ def _check_orbit(model, problem, w, u, p, ends, dg, adm, durations, x_return, x_
 
 
 def _check_dense(model, problem, orbit, u, p) -> str | None:
-    """No guard of the phase is crossed (admissibly, in its direction) before the phase ends."""
-    for k, arc in enumerate(orbit):
-        phase = model.phases[arc.phase]
-        K = arc.x.shape[1]
-        for j, transition in enumerate(phase.transitions):
-            guard_map, admissible_map = problem.guard_maps[arc.phase][j]
-            g = transition.direction * np.asarray(guard_map(arc.x, u, p), dtype=float).ravel()
-            a = (
-                np.asarray(admissible_map(arc.x, u, p), dtype=float).ravel()
-                if admissible_map is not None
-                else np.ones(K)
-            )
-            scale = 1e-9 * (1 + np.max(np.abs(g)))
-            armed = np.maximum.accumulate(g < -scale)
-            last = K - 1 if j == 0 else K  # the cycle transition fires at the last sample
-            for idx in range(1, last):
-                if armed[idx - 1] and g[idx - 1] < 0 <= g[idx] and (a[idx - 1] > 0 or a[idx] > 0):
-                    t = arc.t[idx]
-                    label = _phase_label(model, problem, k)
-                    return (
-                        f"no gait: the orbit crosses '{transition.name}' inside "
-                        f"{label} at t = {t:.4g} s, before the phase ends "
-                        f"(e.g. a foot through the ground); not a gait with this phase sequence"
-                    )
-    return None
-
-
-#: A unilateral constraint counts as violated where ``c < -_CONSTRAINT_TOL · (1 + max |c|)`` on
-#: the dense samples (the shooting solution's own accuracy is ~1e-10), and a constraint that
-#: starts active must rise faster than ``_CONSTRAINT_TOL`` per second (in its unit).
-_CONSTRAINT_TOL = 1e-9
+    """No guard of a phase is crossed (admissibly, in its direction) before the phase ends
+    (:func:`gaitopt.orbit.certificate.check_early_crossings` on the shooting's samples)."""
+    return check_early_crossings(model, dense_arcs(model, problem, orbit, u), p)
 
 
 def check_constraints(model, problem, orbit, u, p) -> str | None:
-    """Every unilateral constraint of every phase holds on the orbit's dense samples.
-
-    A constraint declared ``at_start`` (zero where the phase begins: a trailing foot on the
-    ground) must also rise there, ``ċ > 0`` (the foot lifts off); one declared ``at_end`` is zero
-    at the phase's last sample by construction.  Returns the first violation in words, or None.
-    """
-    for k, arc in enumerate(orbit):
-        phase = model.phases[arc.phase]
-        for constraint, (c_map, rate) in zip(
-            phase.constraints, problem.constraint_maps[arc.phase], strict=True
-        ):
-            c = np.asarray(c_map(arc.x, u, p), dtype=float).ravel()
-            scale = _CONSTRAINT_TOL * (1 + float(np.max(np.abs(c))))
-            unit = f" {constraint.unit}" if constraint.unit else ""
-            label = _phase_label(model, problem, k)
-            if constraint.at_start:
-                c0_rate = float(rate(arc.x[:, 0], u, p))
-                if not c0_rate > _CONSTRAINT_TOL:
-                    return (
-                        f"no gait: {constraint.outcome} at the start of {label}: "
-                        f"'{constraint.name}' starts at 0 and must rise, but its rate is "
-                        f"{c0_rate:.3g}{unit}/s ({constraint.source})"
-                    )
-            inner = slice(1 if constraint.at_start else 0, -1 if constraint.at_end else None)
-            bad = np.nonzero(c[inner] < -scale)[0]
-            if bad.size:
-                j = int(bad[0]) + (1 if constraint.at_start else 0)
-                return (
-                    f"no gait: {constraint.outcome} in {label} at t = {arc.t[j]:.4g} s: "
-                    f"'{constraint.name}' fails (value {c[j]:.3g}{unit}, lowest "
-                    f"{float(np.min(c[inner])):.3g}{unit}; {constraint.source})"
-                )
-    return None
-
-
-def _check_minimal_period(model, problem, w, steps) -> str | None:
-    """A period-k orbit must not be a shorter orbit repeated."""
-    starts = []
-    n_phases = len(model.phases)
-    for kind, k, off, shape in problem.layout:
-        if kind == "nodes" and k % n_phases == 0 and k > 0:
-            n = shape[0]
-            starts.append(w[off : off + n])
-    x0 = model.lift(w[: problem.m])
-    for j, xj in enumerate(starts, start=1):
-        if steps % j == 0 and np.max(np.abs(xj - x0)) < 1e-6 * (1 + np.max(np.abs(x0))):
-            return (
-                f"no period-{steps} gait here: the orbit found is the period-{j} gait repeated; "
-                f"try a guess on the period-{steps} orbit (past its period doubling)"
-            )
-    return None
+    """Every unilateral constraint of every phase holds on the orbit's dense samples, by the
+    certificate's one rule (:func:`gaitopt.orbit.certificate.check_constraints`):
+    ``c ≥ −1e-9 · (1 + max |c|)``, and a constraint declared ``at_start`` rises where the phase
+    begins (``ċ > 1e-9``: the trailing foot lifts off).  Returns the first violation in words,
+    or None."""
+    return _check_constraints(model, dense_arcs(model, problem, orbit, u), p)

@@ -197,7 +197,8 @@ class PhaseFunctions:
 
 
 # A constraint that starts active must rise faster than this (its unit per second); one that does
-# not must not start below -_CONSTRAINT_START (its unit).  The shooting's certify uses the same.
+# not must not start below -_CONSTRAINT_START (its unit).  The certificate of both front doors
+# (gaitopt.orbit.certificate.CONSTRAINT_TOL) uses the same.
 _CONSTRAINT_RATE = 1e-9
 _CONSTRAINT_START = 1e-9
 

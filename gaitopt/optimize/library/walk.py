@@ -124,7 +124,7 @@ def gait_library(
         t0 = time.perf_counter()
         gait = solve(float(value), last.gait if last is not None else None)
         point = LibraryPoint(float(value), gait, last is not None, time.perf_counter() - t0)
-        if gait.success and getattr(gait, "transcription", None) is not None:
+        if gait.success and gait.transcription is not None:
             col, w = gait.transcription
             point.hessian = reduced_hessian(col, w, col.model.p)
         library.points.append(point)

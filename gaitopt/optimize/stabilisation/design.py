@@ -113,7 +113,7 @@ def stabilise(
             f"`gait` must be a successful optimum of gaitopt.optimize_gait, got one that failed "
             f"({why}); solve it first"
         )
-    transcription = getattr(gait, "transcription", None)
+    transcription = gait.transcription
     if transcription is None:
         raise GaitoptInputError(
             "`gait` carries no transcription (it was not made by this gaitopt's optimize_gait); "
