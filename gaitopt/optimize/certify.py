@@ -2,7 +2,9 @@
 dense samples of guards and constraints, the independent simulation with its input profile, the
 same cost in simulation, and its Floquet multipliers by AD and by finite differences.  A
 least-effort optimum solved with the arcs of its input bounds says in its message where each
-input sits at its bound (``at the bound: hip_torque = -4 on [0, 0.407938] s, …``)."""
+input sits at its bound (``at the bound: hip_torque = -4 on [0, 0.407938] s, …``), and one with
+touch points of its state bounds or limits made junctions says when each touches (``touch
+points (free mesh points): stance knee flexion >= 0 at 0.651808 s``)."""
 
 from __future__ import annotations
 
@@ -18,6 +20,7 @@ from .collocation import Collocation
 from .floquet import multipliers_of, return_map_jacobian
 from .problem import GaitProblem
 from .result import OptimalGait
+from .state_arcs import touch_times
 from .verify import (
     check_dense,
     map_jacobian_fd,
@@ -136,4 +139,7 @@ def _certify(
     spans = saturated_spans(col, w, p)
     if spans:  # the arcs of active input bounds (least effort), with their junction times
         result.message += f"; at the bound: {', '.join(spans)}"
+    touches = touch_times(col, w, p)
+    if touches:  # touch points of state bounds and limits, made junctions
+        result.message += f"; touch points (free mesh points): {', '.join(touches)}"
     return result

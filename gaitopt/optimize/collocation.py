@@ -31,6 +31,8 @@ Active input bounds of a cost without powers (least effort) use the same arcs, w
 arc, collocated on a free one (its bound kept at the midpoints between the nodes too), so the
 kink where it meets the bound is an arc boundary and the refinement keeps the collocation's
 order (the compass gait at |τ| ≤ 4 N·m: 6.6e-11, where a uniform mesh stalls at 2.5e-6).
+Touch points of state bounds and limits are junctions of the same arcs (``Arc.touches``, rows
+``ċ = 0`` there: :mod:`gaitopt.optimize.state_arcs`).
 
 Linking (as in :mod:`gaitopt.shooting`): the first state is ``lift(s)`` on the section; each phase
 ends on its guard (crossing in the stated direction, admissibly); the reset of its end state,
@@ -70,6 +72,7 @@ from .radau import (
     _derivative_matrix,
     lagrange_matrix,
 )
+from .state_arcs import touch_rows
 
 __all__ = ["RadauMesh", "Collocation", "lagrange_matrix", "Group", "Arc"]
 
@@ -169,9 +172,10 @@ class Collocation:
         if structure is not None:
             if len(structure) != len(self.chain):
                 raise GaitoptInputError("Collocation: a structure needs arcs for every phase")
-            if not work and not any(any(a.bounds) for arcs in structure for a in arcs):
+            if not work and not any(any(a.bounds) or a.touches for arcs in structure for a in arcs):
                 raise GaitoptInputError(
-                    "Collocation: the arcs of a cost without powers are those of input bounds"
+                    "Collocation: the arcs of a cost without powers are those of input bounds "
+                    "or of touch points"
                 )
             for arcs in structure:
                 if sum(a.intervals for a in arcs) != N:
@@ -417,8 +421,10 @@ class Collocation:
                 work_terms.append(ca.mtimes(ca.sum1(positive * power), wq))
                 work_terms.append(problem.impulse_work(i, x_end, u_end, p))
             else:
-                if structure is not None:  # the arcs of active input bounds
-                    self._bound_arcs(k, Xk, Uk, p, label, add)
+                if structure is not None and any(any(a.bounds) for x in structure for a in x):
+                    self._bound_arcs(k, Xk, Uk, p, label, add)  # the arcs of input bounds
+                if structure is not None:  # touch points of state bounds and limits
+                    touch_rows(self, k, i, Xk, Uk, p, label, add)
                 L = ca.vertcat(*[problem.integrand(i, Xc[:, c], Uk[:, c], p) for c in range(N * d)])
                 cost_terms.append(hq * ca.mtimes(L.T, wq))
 
