@@ -139,6 +139,15 @@ def _certify(
     spans = saturated_spans(col, w, p)
     if spans:  # the arcs of active input bounds (least effort), with their junction times
         result.message += f"; at the bound: {', '.join(spans)}"
+    if (
+        problem.braking_effort > 0
+        and col.structure is not None
+        and problem.cost_kind in ("work", "cot")
+    ):  # the braking arcs' regularisation: in the objective, not in the reported cost
+        result.message += (
+            f"; braking arcs regularised by {problem.braking_effort:g} ∫u² dt "
+            f"(∫u² dt = {sol['braking_effort']:.6g} on them, not in the cost)"
+        )
     touches = touch_times(col, w, p)
     if touches:  # touch points of state bounds and limits, made junctions
         result.message += f"; touch points (free mesh points): {', '.join(touches)}"

@@ -219,6 +219,7 @@ class Collocation:
             self.groups.append(Group(name, start, expr.shape[0], low == high))
 
         cost_terms, work_terms, effort_terms, distance = [], [], [], []
+        brake_terms: list[Any] = []  # ∫uᵢ² dt on braking arcs (GaitProblem.braking_effort)
         step_vectors = []
         for k, i in enumerate(self.chain):
             phase = phases[i]
@@ -419,6 +420,9 @@ class Collocation:
                         add(name, us[r, free_nodes], ulo[r], uhi[r])
                 positive = ca.DM((node_kinds == POSITIVE).astype(float))
                 work_terms.append(ca.mtimes(ca.sum1(positive * power), wq))
+                if problem.braking_effort > 0:  # ∫uᵢ² dt on the braking arcs (GaitProblem)
+                    braking = (node_kinds == NEGATIVE) & np.repeat(signed, d, axis=1)
+                    brake_terms.append(ca.mtimes(ca.sum1(ca.DM(braking.astype(float)) * Uk**2), wq))
                 work_terms.append(problem.impulse_work(i, x_end, u_end, p))
             else:
                 if structure is not None and any(any(a.bounds) for x in structure for a in x):
@@ -457,6 +461,9 @@ class Collocation:
             # Positive work alone leaves singular arcs (inputs that chatter between the nodes);
             # a small effort term selects a smooth optimum.  The reported cost is J alone.
             objective = J + problem.regularisation * ca.sum1(ca.vertcat(*effort_terms))
+        braking = ca.sum1(ca.vertcat(*brake_terms)) if brake_terms else ca.MX(0)
+        if brake_terms:  # the singular braking arcs' least-effort torque; reported apart
+            objective = J + problem.braking_effort * braking
         self.nlp = {"x": w, "p": p_in, "f": objective, "g": ca.vertcat(*g)}
         self.lbx = np.concatenate(B.lb)
         self.ubx = np.concatenate(B.ub)
@@ -468,6 +475,7 @@ class Collocation:
             "distance": total,
             "p_used": p,
             "positive_work": ca.sum1(ca.vertcat(*work_terms)) if work else ca.MX(np.nan),
+            "braking_effort": braking,
         }
         self._X, self._U, self._T = X, U, T
         self._theta = Th
@@ -736,6 +744,7 @@ class Collocation:
             "period": float(out["period"].ravel()[0]),
             "distance": float(out["distance"].ravel()[0]),
             "positive_work": float(out["positive_work"].ravel()[0]),
+            "braking_effort": float(out["braking_effort"].ravel()[0]),
             "X": [np.asarray(x, dtype=float) for x in X],
             "U": [self.blocks.get(w, f"U{k}") for k in range(len(self.chain))],
             "T": np.array(
