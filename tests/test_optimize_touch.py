@@ -124,3 +124,22 @@ def test_no_touch_without_an_interior_minimum():
     assert col.structure is None
     assert detect_touches(col, w, col.model.p, None) is None
     assert gait.cost == pytest.approx(8.911662799, rel=1e-9)  # README, joint limits
+
+
+@pytest.mark.slow  # 58 s wall on the loaded 2-core machine: run by `make test-slow`
+def test_touch_point_with_active_input_bound(touched):
+    # The touch junction and the arcs of an active input bound together: |τ| ≤ 6 N·m cuts the
+    # torque of the touch-limited optimum above (its peak |τ| exceeds 6: the bound is active,
+    # listed), so the least effort can only rise; certified under the same rules (measured
+    # 8.909004815 N²·m²·s, discretisation error 3.3e-10, arcs [lo free free lo] with the touch
+    # at the junction of the two free arcs, 0.5415 s).
+    gait = optimize_gait(gaitopt.model("compass_gait", slope=0), period=0.8, step_length=0.3,
+                         bounds={"hip_torque": 6.0},
+                         state_bounds={"swing": (LOW, np.inf)})  # fmt: skip
+    assert gait.success and gait.verified, gait.message
+    assert gait.discretisation_error <= 1e-8
+    assert gait.cost > touched.cost
+    assert "|hip_torque| <= 6" in gait.active_constraints
+    assert f"touch points of {LABEL} (single support)" in gait.active_constraints
+    assert any(a.startswith("arcs of the input bounds") for a in gait.active_constraints)
+    assert 0.5 < _junction(gait) < 0.6
