@@ -174,11 +174,13 @@ def test_cli_excluding_bound_reports_failure(capsys):
 @pytest.mark.slow  # ≥ 25 s: run by `make test-slow` (CI runs both)
 def test_five_link_knee_study_fast(tmp_path):
     # problems/optimal_five_link_knee.py --fast: the knee-limited 0.5 m / 0.7 s step of OptimTraj
-    # (MAIN.m c8d1d91, pathConstraint.m 867eeb3), one start, refinement target 1e-3.  The knee
-    # limit holds at the nodes and binds: the free-knee optimum from start 0 (469.50197507
-    # N²·m²·s, certified to 4.6e-11; results/optimal_five_link_knee/table.csv lists it among the
-    # three free minima, the best 456.19077299) hyperextends the stance knee by 0.016 rad, so the
-    # limited cost from the same start is higher.
+    # (MAIN.m c8d1d91, pathConstraint.m 867eeb3), one start, refinement target 1e-8.  The stance
+    # knee straightens at one touch point near heel strike; made a free mesh point
+    # (gaitopt.optimize.state_arcs, ċ = 0 there) the optimum is certified.  The limit binds:
+    # the free-knee optimum from start 0 (469.50197507 N²·m²·s, certified to 4.6e-11;
+    # results/optimal_five_link_knee/table.csv lists it among the three free minima, the best
+    # 456.19077299) hyperextends the stance knee by 0.016 rad, so the limited cost from the same
+    # start is higher.
     run = subprocess.run(
         [sys.executable, str(ROOT / "problems" / "optimal_five_link_knee.py"), "--fast",
          "--out", str(tmp_path)],
@@ -187,17 +189,25 @@ def test_five_link_knee_study_fast(tmp_path):
     summary = json.loads((tmp_path / "optimal_five_link_knee" / "summary.json").read_text())
     (row,) = summary["rows"]
     assert row["case"] == "knee limit", run.stderr
+    assert row["success"] and row["verified"], row["message"]
+    assert row["discretisation_error"] <= 1e-8
+    # Above the free-knee optimum of the same start; and within 1e-6 of the uncertified value
+    # of a uniform 48-interval mesh without the touch junction (469.6501187, the README's
+    # before this change: an independent transcription, known to about 1e-4 because of its dip).
     assert row["cost"] > 469.50197507
-    # Dense samples of the orbit (8 per interval): the stance knee straightens (its limit binds)
-    # and dips below straight between the nodes only by the mesh's interpolation error
-    # (measured 2.1e-5 rad at this target's 12 intervals, 4.6e-7 at 48; 1e-4 allowed here);
-    # the free-knee optimum hyperextends it by 0.016 rad.  The swing knee stays flexed.
-    assert -1e-4 < row["min_stance_knee_flexion_rad"] < 1e-6
+    assert row["cost"] == pytest.approx(469.6501187, rel=1e-6)
+    # The knee limit on 64 samples per mesh interval of the final polynomials, the touch point
+    # among them, by the certificate's rule c >= -1e-9 (1 + max|c|) (measured -8.2e-12 rad),
+    # and in the independent simulation of the step with its torques (DOP853, rtol 1e-12; the
+    # same rule, measured +2.2e-9 rad).  It binds (below 1e-6), and the swing knee stays flexed.
+    tolerance = row["dense_tolerance_rad"]
+    assert -tolerance <= row["min_stance_knee_flexion_rad"] < 1e-6
+    assert -tolerance <= row["min_stance_knee_flexion_simulated_rad"] < 1e-6
     assert row["min_swing_knee_flexion_rad"] > 1e-3
-    assert "stance knee flexion >= 0 (single support)" in row["active_constraints"]
-    # Certified, or refused for the limit's dip between the nodes (the touch point near heel
-    # strike inside a mesh interval: 4.6e-7 rad measured on the full run), never silently.
-    assert row["success"] or "'stance knee flexion >= 0' fails between the nodes" in row["message"]
+    assert "stance knee flexion >= 0 at 0.652" in row["touch_points"]
+    assert "touch points of stance knee flexion >= 0 (single support)" in row["active_constraints"]
+    (span,) = summary["active_spans"]["knee limit"]["stance knee flexion >= 0 (single support)"]
+    assert 0.65 < span[0] <= span[1] < 0.66
     assert (tmp_path / "optimal_five_link_knee" / "table.csv").exists()
 
 

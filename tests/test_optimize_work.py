@@ -119,3 +119,25 @@ def test_slack_formulation_converges_to_the_exact_work(model, gait):
         gaps.append(abs(col.unpack(w, model.p)["cost"] - gait.cost) / gait.cost)
     assert gaps[0] > gaps[1] > gaps[2]
     assert gaps[2] < 3e-4
+
+
+def test_braking_effort_is_reported_not_counted(model, gait):
+    # GaitProblem.braking_effort = ε adds ε ∫u² dt over the braking arcs to the exact stage's
+    # objective only.  Here the one braking arc (−lo) holds the torque at −20 N·m, so the term
+    # is 400 N²·m² times that arc's duration (closed form), and ε = 1e-6 moves the optimum only
+    # to second order in ε: the reported positive work is the plain optimum's to the 1e-8
+    # certificate target, and the simulated work confirms it (the certificate's check).
+    from gaitopt.optimize import solve_problem
+    from gaitopt.optimize.radau import NEGATIVE
+
+    braked = solve_problem(GaitProblem(model, "work", braking_effort=1e-6, **STATEMENT))
+    assert braked.success, braked.message
+    assert braked.cost == pytest.approx(gait.cost, rel=1e-8)
+    col, w = braked.transcription
+    (arcs,) = col.structure
+    (j,) = [a for a, arc in enumerate(arcs) if arc.signs[0] == NEGATIVE]
+    duration = col.theta_of(w, 0)[j] * braked.period
+    value = col.unpack(w, model.p)["braking_effort"]
+    assert value == pytest.approx(20.0**2 * duration, rel=1e-9)  # u ≡ −20 on the arc
+    assert "braking arcs regularised by 1e-06" in braked.message
+    assert braked.problem["braking_effort"] == 1e-6

@@ -1,7 +1,9 @@
 """Which constraints of an optimal gait are active, and which one a failed solve cannot meet
 (the ``active_constraints`` of a result; the message of an infeasible problem).  An input bound
 of a least-effort optimum solved with the arcs of its bounds (:func:`gaitopt.optimize.arcs.
-detect_bound_arcs`) is listed with its arcs: ``"arcs of the input bounds [lo free lo]"``."""
+detect_bound_arcs`) is listed with its arcs: ``"arcs of the input bounds [lo free lo]"``; a
+limit whose touch points are junctions (:func:`gaitopt.optimize.state_arcs.detect_touches`) as
+``"touch points of stance knee flexion >= 0 (single support)"``."""
 
 from __future__ import annotations
 
@@ -9,6 +11,7 @@ import numpy as np
 
 from .arcs import bound_arcs_of
 from .collocation import Collocation
+from .state_arcs import describe_touches
 
 
 def _violation(col: Collocation, w: np.ndarray, p: np.ndarray) -> tuple[str, float]:
@@ -65,6 +68,9 @@ def _active(col: Collocation, w: np.ndarray, p: np.ndarray) -> list[str]:
     # The arcs of active input bounds (least effort's exact stage): where each input sits at
     # its bound, after the bound itself.
     out.extend(bound_arcs_of(col, w, p))
+    # Touch points of state bounds and limits made junctions (state_arcs.detect_touches).
+    labels = [col._phase_label(k) for k in range(len(col.chain))]
+    out.extend(describe_touches(col.structure, labels))
     if problem.free:
         values = B.get(w, "free").ravel()
         lo, hi = problem.free_bounds()

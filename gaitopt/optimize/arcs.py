@@ -310,6 +310,14 @@ def describe_bounds(structure: list[list[Arc]], inputs: tuple[str, ...] | list[s
     return "; ".join(f"[{p}]" for p in phases)
 
 
+def _has_bound_arcs(col: Collocation) -> bool:
+    """Whether ``col`` is transcribed with arcs of input bounds (a structure of a cost without
+    powers with an input at a bound on some arc; touch points alone are not)."""
+    if col.structure is None or col.problem.cost_kind in ("work", "cot"):
+        return False
+    return any(any(a.bounds) for arcs in col.structure for a in arcs)
+
+
 def bound_arcs_of(col: Collocation, w: np.ndarray, p: np.ndarray) -> list[str]:
     """The arcs of a solved transcription with arcs of input bounds, for the active set:
     ``["arcs of the input bounds [lo free lo]"]`` (:func:`describe_bounds`; no times, so that
@@ -317,7 +325,7 @@ def bound_arcs_of(col: Collocation, w: np.ndarray, p: np.ndarray) -> list[str]:
     arc is a change of it); empty without such a structure.  ``p`` is unused (the signature
     of the other active-set readers)."""
     del w, p
-    if col.structure is None or col.problem.cost_kind in ("work", "cot"):
+    if not _has_bound_arcs(col):
         return []
     return [f"arcs of the input bounds {describe_bounds(col.structure, col.model.inputs)}"]
 
@@ -326,7 +334,7 @@ def saturated_spans(col: Collocation, w: np.ndarray, p: np.ndarray) -> list[str]
     """The saturated arcs of a solved transcription with arcs of input bounds, with their
     times: ``"hip_torque = -4 on [0, 0.407938] s"`` (time since the section), one per arc and
     input at a bound; empty without such a structure."""
-    if col.structure is None or col.problem.cost_kind in ("work", "cot"):
+    if not _has_bound_arcs(col):
         return []
     sol = col.unpack(w, p)
     low, high = col.problem.input_bounds()

@@ -5,7 +5,9 @@ minimal period), the common referee (:mod:`gaitopt.orbit.referee`: the simulatio
 profile as a feedforward returns, with the same phase timing and the same cost), and its Floquet
 multipliers by AD and by finite differences.  A
 least-effort optimum solved with the arcs of its input bounds says in its message where each
-input sits at its bound (``at the bound: hip_torque = -4 on [0, 0.407938] s, …``)."""
+input sits at its bound (``at the bound: hip_torque = -4 on [0, 0.407938] s, …``), and one with
+touch points of its state bounds or limits made junctions says when each touches (``touch
+points (free mesh points): stance knee flexion >= 0 at 0.651808 s``)."""
 
 from __future__ import annotations
 
@@ -22,6 +24,7 @@ from .collocation import Collocation
 from .floquet import multipliers_of, return_map_jacobian
 from .problem import GaitProblem
 from .result import OptimalGait
+from .state_arcs import touch_times
 from .verify import (
     check_dense,
     feedforward_of,
@@ -140,4 +143,16 @@ def _certify(
     spans = saturated_spans(col, w, p)
     if spans:  # the arcs of active input bounds (least effort), with their junction times
         result.message += f"; at the bound: {', '.join(spans)}"
+    if (
+        problem.braking_effort > 0
+        and col.structure is not None
+        and problem.cost_kind in ("work", "cot")
+    ):  # the braking arcs' regularisation: in the objective, not in the reported cost
+        result.message += (
+            f"; braking arcs regularised by {problem.braking_effort:g} ∫u² dt "
+            f"(∫u² dt = {sol['braking_effort']:.6g} on them, not in the cost)"
+        )
+    touches = touch_times(col, w, p)
+    if touches:  # touch points of state bounds and limits, made junctions
+        result.message += f"; touch points (free mesh points): {', '.join(touches)}"
     return result

@@ -31,6 +31,8 @@ Active input bounds of a cost without powers (least effort) use the same arcs, w
 arc, collocated on a free one (its bound kept at the midpoints between the nodes too), so the
 kink where it meets the bound is an arc boundary and the refinement keeps the collocation's
 order (the compass gait at |τ| ≤ 4 N·m: 6.6e-11, where a uniform mesh stalls at 2.5e-6).
+Touch points of state bounds and limits are junctions of the same arcs (``Arc.touches``, rows
+``ċ = 0`` there: :mod:`gaitopt.optimize.state_arcs`).
 
 Linking (as in :mod:`gaitopt.shooting`): the first state is ``lift(s)`` on the section; each phase
 ends on its guard (crossing in the stated direction, admissibly); the reset of its end state,
@@ -71,6 +73,7 @@ from .radau import (
     _derivative_matrix,
     lagrange_matrix,
 )
+from .state_arcs import touch_rows
 
 __all__ = ["RadauMesh", "Collocation", "lagrange_matrix", "Group", "Arc"]
 
@@ -171,9 +174,10 @@ class Collocation:
         if structure is not None:
             if len(structure) != len(self.chain):
                 raise GaitoptInputError("Collocation: a structure needs arcs for every phase")
-            if not work and not any(any(a.bounds) for arcs in structure for a in arcs):
+            if not work and not any(any(a.bounds) or a.touches for arcs in structure for a in arcs):
                 raise GaitoptInputError(
-                    "Collocation: the arcs of a cost without powers are those of input bounds"
+                    "Collocation: the arcs of a cost without powers are those of input bounds "
+                    "or of touch points"
                 )
             for arcs in structure:
                 if sum(a.intervals for a in arcs) != N:
@@ -217,6 +221,7 @@ class Collocation:
             self.groups.append(Group(name, start, expr.shape[0], low == high))
 
         cost_terms, work_terms, effort_terms, distance = [], [], [], []
+        brake_terms: list[Any] = []  # ∫uᵢ² dt on braking arcs (GaitProblem.braking_effort)
         step_vectors = []
         for k, i in enumerate(self.chain):
             phase = phases[i]
@@ -417,10 +422,15 @@ class Collocation:
                         add(name, us[r, free_nodes], ulo[r], uhi[r])
                 positive = ca.DM((node_kinds == POSITIVE).astype(float))
                 work_terms.append(ca.mtimes(ca.sum1(positive * power), wq))
+                if problem.braking_effort > 0:  # ∫uᵢ² dt on the braking arcs (GaitProblem)
+                    braking = (node_kinds == NEGATIVE) & np.repeat(signed, d, axis=1)
+                    brake_terms.append(ca.mtimes(ca.sum1(ca.DM(braking.astype(float)) * Uk**2), wq))
                 work_terms.append(problem.impulse_work(i, x_end, u_end, p))
             else:
-                if structure is not None:  # the arcs of active input bounds
-                    self._bound_arcs(k, Xk, Uk, p, label, add)
+                if structure is not None and any(any(a.bounds) for x in structure for a in x):
+                    self._bound_arcs(k, Xk, Uk, p, label, add)  # the arcs of input bounds
+                if structure is not None:  # touch points of state bounds and limits
+                    touch_rows(self, k, i, Xk, Uk, p, label, add)
                 L = ca.vertcat(*[problem.integrand(i, Xc[:, c], Uk[:, c], p) for c in range(N * d)])
                 cost_terms.append(hq * ca.mtimes(L.T, wq))
 
@@ -453,6 +463,9 @@ class Collocation:
             # Positive work alone leaves singular arcs (inputs that chatter between the nodes);
             # a small effort term selects a smooth optimum.  The reported cost is J alone.
             objective = J + problem.regularisation * ca.sum1(ca.vertcat(*effort_terms))
+        braking = ca.sum1(ca.vertcat(*brake_terms)) if brake_terms else ca.MX(0)
+        if brake_terms:  # the singular braking arcs' least-effort torque; reported apart
+            objective = J + problem.braking_effort * braking
         self.nlp = {"x": w, "p": p_in, "f": objective, "g": ca.vertcat(*g)}
         self.lbx = np.concatenate(B.lb)
         self.ubx = np.concatenate(B.ub)
@@ -464,6 +477,7 @@ class Collocation:
             "distance": total,
             "p_used": p,
             "positive_work": ca.sum1(ca.vertcat(*work_terms)) if work else ca.MX(np.nan),
+            "braking_effort": braking,
         }
         self._X, self._U, self._T = X, U, T
         self._theta = Th
@@ -732,6 +746,7 @@ class Collocation:
             "period": float(out["period"].ravel()[0]),
             "distance": float(out["distance"].ravel()[0]),
             "positive_work": float(out["positive_work"].ravel()[0]),
+            "braking_effort": float(out["braking_effort"].ravel()[0]),
             "X": [np.asarray(x, dtype=float) for x in X],
             "U": [self.blocks.get(w, f"U{k}") for k in range(len(self.chain))],
             "T": np.array(

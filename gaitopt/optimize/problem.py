@@ -159,6 +159,14 @@ class GaitProblem:
         Weight ε of ``ε ∫Σuᵢ² dt`` added to the objective of the *first* (slack) stage of the
         work-based costs only (units of the cost per N²·m²·s; default 0): it can smooth the
         guess of the arcs; the second, exact stage, whose optimum is reported, has none.
+    braking_effort : float
+        Weight ε of ``ε ∫uᵢ² dt`` over the arcs where input ``i`` brakes (negative power) added
+        to the objective of the *exact* stage of the work-based costs (units of the cost per
+        N²·m²·s; default 0).  Negative work is free, so a braking arc is singular: any torque
+        that keeps the power's sign costs the same, and the refinement need not settle.  The
+        term picks the least-effort braking torque; the reported cost is the positive work
+        alone (or its cost of transport), and the term's value is reported with it
+        (``OptimalGait.problem["braking_effort"]``, the message).
     min_crossing_rate : float
         Least rate at which each phase's guard is crossed at its end, ``direction · ġ`` (guard
         units per second): a transversal touchdown, not a graze, which no simulation could
@@ -199,6 +207,7 @@ class GaitProblem:
     steps: int = 1
     max_phase_time: float = 10.0
     regularisation: float = 0.0
+    braking_effort: float = 0.0
     min_crossing_rate: float = 1e-2
     clearance: float = 0.0
     guard_margin: float = 0.0
@@ -544,6 +553,7 @@ class GaitProblem:
             "steps": self.steps,
             **({"clearance": self.clearance} if self.clearance else {}),
             **({"guard_margin": self.guard_margin} if self.guard_margin else {}),
+            **({"braking_effort": self.braking_effort} if self.braking_effort else {}),
             **({} if self.continuous_inputs else {"continuous_inputs": False}),
         }
 

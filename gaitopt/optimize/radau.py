@@ -86,12 +86,17 @@ class Arc:
         Per input on an arc of a power sign, ``+1`` or ``−1`` if it stays at its upper or lower
         bound over the arc (a bang arc: the input is fixed there, so where it leaves the bound
         is a switching time, not a jump inside a mesh interval), else 0; empty: none.
+    touches : tuple of str
+        Labels of the state bounds and limits (``"stance knee flexion >= 0"``) that touch their
+        bound where the arc ends: the junction is a touch point, ``ċ = 0`` there
+        (:mod:`gaitopt.optimize.state_arcs`); empty: none.
     """
 
     intervals: int
     signs: tuple[int, ...]
     fraction: float
     bounds: tuple[int, ...] = ()
+    touches: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -36,6 +36,7 @@ from .guess import check_warm_start
 from .problem import _WHY_STEPS, MAX_STEPS, GaitProblem, as_problem
 from .result import Minimum, OptimalGait, StartRecord
 from .starts import dask_starts
+from .state_arcs import detect_touches
 
 __all__ = [
     "optimize_gait",
@@ -450,19 +451,20 @@ def _finish(
             )
         col, w, stats = exact, w_exact, stats_exact
         structure_note = f"; arcs of the power signs {_describe(structure)}"
-    elif (structure := detect_bound_arcs(col, w, p)) is not None:
+    elif (structure := _arcs_without_powers(col, w, p)) is not None:
         # An active input bound: arcs with the input at its bound and free junction times
-        # (the kink where it meets the bound is no longer inside a mesh interval).
-        arcs = describe_bounds(structure, problem.model.inputs)
+        # (the kink where it meets the bound is no longer inside a mesh interval); a touch
+        # point of a state bound or limit: a junction with ċ = 0 there (state_arcs).
+        arcs = _describe_arcs(structure, problem.model.inputs)
         exact = _collocation(problem, RadauMesh(sum(a.intervals for a in structure[0]), col.d),
                              structure)  # fmt: skip
         w_exact, stats_exact = _run(exact, exact.from_solution(col, w, p), p)
         if _converged(stats_exact):
             col, w, stats = exact, w_exact, stats_exact
-            structure_note = f"; arcs of the input bounds {arcs}"
+            structure_note = f"; {arcs}"
         else:
             structure_note = (
-                f"; the arcs of the input bounds {arcs} did not converge "
+                f"; the {arcs} did not converge "
                 f"({stats_exact.get('return_status')}): refined without them"
             )
     sol = col.unpack(w, p)
@@ -510,6 +512,28 @@ def _finish(
             + result.message
         )
     return result
+
+
+def _arcs_without_powers(col: Collocation, w: np.ndarray, p: np.ndarray) -> Any:
+    """The arcs of a first solution of a cost without powers: those of its active input bounds
+    (:func:`~gaitopt.optimize.arcs.detect_bound_arcs`), cut at the interior touch points of its
+    state bounds and limits (:func:`~gaitopt.optimize.state_arcs.detect_touches`); None if it
+    has neither."""
+    bounds = detect_bound_arcs(col, w, p)
+    limited = bool(col.limit_groups or col.problem.state_bounds)
+    touched = detect_touches(col, w, p, bounds) if limited else None
+    return touched if touched is not None else bounds
+
+
+def _describe_arcs(structure: list, inputs: tuple[str, ...]) -> str:
+    """``arcs of the input bounds [lo free lo]`` and/or ``touch points of … made junctions``."""
+    words = []
+    if any(any(a.bounds) for arcs in structure for a in arcs):
+        words.append(f"arcs of the input bounds {describe_bounds(structure, inputs)}")
+    touches = list(dict.fromkeys(n for arcs in structure for a in arcs for n in a.touches))
+    if touches:
+        words.append(f"touch points of {', '.join(touches)} made junctions")
+    return "; ".join(words)
 
 
 def _refined(col: Collocation) -> Collocation:

@@ -70,6 +70,7 @@ def problem_from(data: Mapping[str, Any]) -> GaitProblem:
         clearance=float(data.get("clearance", 0.0)),
         guard_margin=float(data.get("guard_margin", 0.0)),
         continuous_inputs=bool(data.get("continuous_inputs", True)),
+        braking_effort=float(data.get("braking_effort", 0.0)),
     )
 
 
