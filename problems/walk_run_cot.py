@@ -13,9 +13,8 @@ speed fixed; step length fixed at ``STEP`` (free, the step shrinks without limit
 of swinging a massless leg, ever shorter steps cost ever less, 1.8e-5 at 1 m/s and 1 mm steps);
 ``0 ≤ F ≤ F_MAX`` (the regularisation: Srinivasan & Ruina's impulsive push-off and impulsive
 running stance become pushes at ``F_MAX``; their heel-strike collision stays impulsive and only
-dissipates).  Each point: cold starts (a multi-start of ``STARTS`` starts on the first mesh of ``MESHES``, one
-start on the second), then the continuation
-in speed from below and from above (each speed warm started from its neighbour's lowest
+dissipates).  Each point: cold starts (a multi-start of ``STARTS`` starts on the first mesh of
+``MESHES``, one start on the second), then the continuation in speed from below and from above (each speed warm started from its neighbour's lowest
 certified optimum, or its lowest converged one); the lowest certified optimum is kept, and
 attempts that certify different costs are flagged (different local minima).  Certified means:
 IPOPT converged on the exact positive-work transcription, the discretisation error is below
@@ -137,9 +136,7 @@ def _solve(
     gait: str, v: float, label: str, guess, points: dict, starts: int = 1, mesh: int = 0
 ) -> None:
     t0 = time.perf_counter()
-    result = solve_problem(
-        problem_at(gait, v), guess=guess, mesh=MESHES[gait][mesh], starts=starts
-    )
+    result = solve_problem(problem_at(gait, v), guess=guess, mesh=MESHES[gait][mesh], starts=starts)
     elapsed = time.perf_counter() - t0
     converged = bool(result.orbit) and result.cost is not None and np.isfinite(result.cost)
     points[v].append({
