@@ -9,13 +9,15 @@ instantaneous double-support transfer with a plastic heel strike) and ``minimal_
 (stance, flight) — at the step length ``d = STEP`` and speeds ``SPEEDS``.
 
 Statement (both sequences): cost ``"cot"`` = positive leg work ``∫ max(0, F ṙ) dt / (M g d)``;
-speed fixed; step length fixed at ``STEP`` (free, the step shrinks without limit: with no cost
-of swinging a massless leg, ever shorter steps cost ever less, 1.8e-5 at 1 m/s and 1 mm steps);
+speed fixed; step length fixed at ``STEP`` (freed, the step shrinks without limit: with no cost
+of swinging a massless leg ever shorter steps cost ever less, and a walk at 1 m/s went to 1 mm
+steps, its phase's least duration);
 ``0 ≤ F ≤ F_MAX`` (the regularisation: Srinivasan & Ruina's impulsive push-off and impulsive
 running stance become pushes at ``F_MAX``; their heel-strike collision stays impulsive and only
 dissipates).  Each point: cold starts (a multi-start of ``STARTS`` starts on the first mesh of
-``MESHES``, one start on the second), then the continuation in speed from below and from above (each speed warm started from its neighbour's lowest
-certified optimum, or its lowest converged one); the lowest certified optimum is kept, and
+``MESHES``, one start on the second), then the continuation in speed from below and from above
+(each speed warm started from its neighbour's lowest certified optimum, or its lowest converged
+one); the lowest certified optimum is kept, and
 attempts that certify different costs are flagged (different local minima).  Certified means:
 IPOPT converged on the exact positive-work transcription, the discretisation error is below
 1e-8, the dense checks pass, and the independent simulation with the optimal force as a
