@@ -66,7 +66,7 @@ GAITS = {"walk": "minimal_biped_walk", "run": "minimal_biped_run"}
 #: solve at 1 m/s, and the other way round for runs at 4 m/s).
 MESHES = {"walk": (RadauMesh(12, 4), RadauMesh(6, 6)), "run": (RadauMesh(6, 6), RadauMesh(12, 4))}
 SPEEDS = (0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 5.0)  # m/s
-FAST = {"walk": (1.0,), "run": (3.0,)}
+FAST = {"walk": (1.0,), "run": (4.0,)}
 STARTS = 2
 SAME = 1e-6  # relative: certified costs further apart are different local minima
 FLOOR = 1.0001e-3  # s: a flight this short sits at the transcription's least phase duration
