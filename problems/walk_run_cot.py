@@ -307,6 +307,7 @@ def draw(rows: list[dict], points: dict, folder: Path) -> None:
             else:
                 ax.plot(x[0], x[1], "C3")
         ax.set_aspect("equal")
+        ax.locator_params(axis="x", nbins=3)
         ax.set_xlabel("hip x from the foot (m)")
         ax.set_ylabel("hip height z (m)")
         ax.set_title(f"{gname}, v = {v:g} m/s\ncot {g.cost:.4g}", fontsize=9)
