@@ -71,7 +71,8 @@ FAST = {"walk": (1.0,), "run": (4.0,)}
 STARTS = 2
 SAME = 1e-6  # relative: certified costs further apart are different local minima
 FLOOR = 1.0001e-3  # s: a flight this short sits at the transcription's least phase duration
-DRAWN = (1.0, 2.0, 4.0)  # m/s: speeds whose optimal gaits gaits.png draws
+#: (sequence, speed in m/s) of the optimal gaits gaits.png draws (their samples go to cot.json).
+DRAWN = (("walk", 1.0), ("walk", 2.0), ("run", 2.0), ("run", 3.0), ("run", 4.0))
 
 
 def problem_at(gait: str, speed: float) -> GaitProblem:
@@ -178,6 +179,17 @@ def library(gait: str, speeds: list[float], fast: bool) -> dict[float, list[dict
     return points
 
 
+def summarise_kind(gait: str, g) -> str:
+    """``walk``; for the running sequence ``run, flight at floor`` (the flight at the
+    transcription's least phase duration: the walk's limit), ``pendular run`` (a held, rigid
+    leg in stance: Srinivasan & Ruina's pendular run) or ``run``."""
+    if gait == "walk":
+        return "walk"
+    if float(g.durations[1]) <= FLOOR:
+        return "run, flight at floor"
+    return "pendular run" if "held" in structure(g.message).split(";")[0] else "run"
+
+
 def summarise(gait: str, v: float, attempts: list[dict]) -> dict:
     """One CSV row: the lowest certified optimum of ``gait`` at ``v`` and its checks."""
     best = _best(attempts)
@@ -198,13 +210,7 @@ def summarise(gait: str, v: float, attempts: list[dict]) -> dict:
     g = best["gait"]
     flight = float(g.durations[1]) if len(g.durations) > 1 else None
     arcs = structure(g.message)
-    kind = gait
-    if gait == "run":
-        kind = (
-            "run, flight at floor"
-            if flight is not None and flight <= FLOOR
-            else ("pendular run" if "held" in arcs.split(";")[0] else "run")
-        )
+    kind = summarise_kind(gait, g)
     balance = energy_balance(g)
     col, w = g.transcription
     lam_min, lam_max = reduced_hessian(col, w, col.model.p)
@@ -271,7 +277,8 @@ def winners(rows: list[dict], speeds: list[float]) -> list[dict]:
     return out
 
 
-def draw(rows: list[dict], points: dict, folder: Path) -> None:
+def draw(rows: list[dict], folder: Path) -> None:
+    """cot.png: the least cost of transport of each sequence against speed."""
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     styles = {"walk": ("o-", "C0"), "run": ("s-", "C3")}
     for gait, (fmt, colour) in styles.items():
@@ -290,28 +297,63 @@ def draw(rows: list[dict], points: dict, folder: Path) -> None:
     save_figure(fig, folder / "cot.png")
     plt.close(fig)
 
-    drawn = [(g, v) for v in DRAWN for g in GAITS if _best(points[g].get(v, []))]
-    if not drawn:
-        return
-    fig, axes = plt.subplots(2, len(drawn), figsize=(3.0 * len(drawn), 5.0), squeeze=False)
-    for j, (gname, v) in enumerate(drawn):
-        g = _best(points[gname][v])["gait"]
-        ax, axf = axes[0, j], axes[1, j]
+
+def samples(points: dict) -> list[dict]:
+    """The drawn optima (:data:`DRAWN`) as plain data: the hip's path about the stance foot (m),
+    the leg force against time (N, s) and the flight's time spans (s)."""
+    out = []
+    for gait, v in DRAWN:
+        best = _best(points[gait].get(v, []))
+        if best is None:
+            continue
+        g = best["gait"]
+        path, flights = [], []
         for arc in g.orbit:
             x = np.asarray(arc.x)
             if arc.phase == 0:
-                hx, hz = x[0] * np.sin(x[1]), x[0] * np.cos(x[1])
-                ax.plot(hx, hz, "C0")
-                for k in np.linspace(0, x.shape[1] - 1, 5).astype(int):
-                    ax.plot([0, hx[k]], [0, hz[k]], color="0.6", lw=0.8)
+                path.append([list(x[0] * np.sin(x[1])), list(x[0] * np.cos(x[1]))])
             else:
-                ax.plot(x[0], x[1], "C3")
+                path.append([list(x[0]), list(x[1])])
+                flights.append([float(arc.t[0]), float(arc.t[-1])])
+        out.append({
+            "gait": gait,
+            "speed_m_s": v,
+            "kind": summarise_kind(gait, g),
+            "cot": g.cost,
+            "path": path,
+            "phases": [int(arc.phase) for arc in g.orbit],
+            "time": list(g.inputs["time"]),
+            "leg_force": list(g.inputs["leg_force"]),
+            "flights": flights,
+        })  # fmt: skip
+    return out
+
+
+def draw_gaits(drawn: list[dict], folder: Path) -> None:
+    """gaits.png: the hip's path with the stance leg at five instants (stance blue, flight red)
+    over the leg force (flight shaded: the leg is off the ground, its force irrelevant)."""
+    if not drawn:
+        return
+    fig, axes = plt.subplots(2, len(drawn), figsize=(3.0 * len(drawn), 5.0), squeeze=False)
+    for j, d in enumerate(drawn):
+        ax, axf = axes[0, j], axes[1, j]
+        for phase, (hx, hz) in zip(d["phases"], d["path"], strict=True):
+            hx, hz = np.asarray(hx), np.asarray(hz)
+            ax.plot(hx, hz, "C0" if phase == 0 else "C3")
+            if phase == 0:
+                for k in np.linspace(0, hx.size - 1, 5).astype(int):
+                    ax.plot([0, hx[k]], [0, hz[k]], color="0.6", lw=0.8)
         ax.set_aspect("equal")
-        ax.locator_params(axis="x", nbins=3)
+        ax.tick_params(axis="x", labelsize=7)
         ax.set_xlabel("hip x from the foot (m)")
         ax.set_ylabel("hip height z (m)")
-        ax.set_title(f"{gname}, v = {v:g} m/s\ncot {g.cost:.4g}", fontsize=9)
-        axf.plot(g.inputs["time"], g.inputs["leg_force"], "k")
+        ax.set_title(f"{d['kind']}, v = {d['speed_m_s']:g} m/s\ncot {d['cot']:.4g}", fontsize=9)
+        t, f = np.asarray(d["time"]), np.asarray(d["leg_force"], dtype=float)
+        for a, b in d["flights"]:
+            f[(t > a) & (t < b)] = np.nan
+            axf.axvspan(a, b, color="C3", alpha=0.15, lw=0)
+        axf.plot(t, f, "k")
+        axf.set_ylim(-1.0, 1.08 * F_MAX)
         axf.set_xlabel("time t (s)")
         axf.set_ylabel("leg force F (N)")
     fig.tight_layout()
@@ -342,7 +384,8 @@ def redraw(folder: Path) -> None:
     data = json.loads((folder / "cot.json").read_text(encoding="utf-8"))
     data["optimal"], data["events"] = winners(rows, speeds), events(rows)
     write_json(data, folder / "cot.json")
-    draw(rows, {g: {} for g in GAITS}, folder)
+    draw(rows, folder)
+    draw_gaits(data.get("drawn", []), folder)
     report(data["optimal"], data["events"])
 
 
@@ -375,6 +418,7 @@ def main(argv: list[str] | None = None) -> int:
     all_speeds = sorted({v for g in GAITS for v in speeds[g]})
     best = winners(rows, all_speeds)
     changes = events(rows)
+    drawn = samples(points)
     columns = list(dict.fromkeys(k for r in rows for k in r))
     write_csv(columns, [[r.get(k) for k in columns] for r in rows], folder / "cot.csv")
     write_json({
@@ -384,12 +428,14 @@ def main(argv: list[str] | None = None) -> int:
         "rows": rows,
         "optimal": best,
         "events": changes,
+        "drawn": drawn,
         "attempts": {g: {str(v): [{k: a[k] for k in a if k != "gait"} for a in points[g][v]]
                          for v in speeds[g]} for g in GAITS},
         "fast": args.fast,
         "time_s": round(time.perf_counter() - t_start, 1),
     }, folder / "cot.json")  # fmt: skip
-    draw(rows, points, folder)
+    draw(rows, folder)
+    draw_gaits(drawn, folder)
     report(best, changes)
     return 0
 
