@@ -149,3 +149,62 @@ def test_walk_run_cot_fast_mode(tmp_path):
             assert row["return_error"] < 1e-8
             assert abs(row["energy_residual_J"]) < 1e-9
     assert (tmp_path / "walk_run_cot" / "cot.png").exists()
+
+
+def _readme_rows(header: str) -> list[list[str]]:
+    readme = (PROBLEMS.parent / "README.md").read_text(encoding="utf-8")
+    table = readme[readme.index(header) :].split("\n\n", 1)[0]
+    return [
+        [c.strip() for c in line.strip("|").split("|")]
+        for line in table.splitlines()[2:]
+        if line.startswith("|")
+    ]
+
+
+def _printed(text: str, value: float) -> bool:
+    """``text`` is ``value`` rounded to the significant digits ``text`` shows."""
+    mantissa = text.split("e")[0]
+    digits = len(mantissa.replace(".", "").lstrip("0"))
+    return float(text) == float(f"{value:.{digits}g}")
+
+
+def test_readme_walk_run_table_is_the_committed_study_output():
+    # Every row of the README's walk-or-run table is results/walk_run_cot/cot.csv (written by the
+    # full run) at the digits printed: each sequence's least certified cost of transport (or a
+    # dash where none is certified), the running sequence's kind and flight, the optimal gait.
+    import csv
+
+    path = PROBLEMS.parent / "results" / "walk_run_cot" / "cot.csv"
+    with open(path, encoding="utf-8") as f:
+        rows = {(r["gait"], float(r["speed_m_s"])): r for r in csv.DictReader(f)}
+    table = _readme_rows("| speed v (m/s) | v/√(g l) | walk: least cost")
+    assert len(table) == len({v for _, v in rows}) == 11
+    for speed, froude, walk, run, kind, optimal in table:
+        v = float(speed)
+        assert _printed(froude, float(rows["walk", v]["froude_speed"])), speed
+        best = {}
+        for gait, printed in (("walk", walk), ("run", run)):
+            row = rows[gait, v]
+            if printed.startswith("—"):
+                assert row["certified"] == "False" and row["failures"], speed
+                continue
+            assert row["certified"] == "True", speed
+            assert _printed(printed, float(row["cot"])), speed
+            best[gait] = (float(row["cot"]), row["kind"])
+        r = rows["run", v]
+        if r["kind"] == "run, flight at floor":
+            assert kind == "flight at the 1 ms floor", speed
+        else:
+            assert kind.startswith(r["kind"] + ", flight "), speed
+            flight = kind.split("flight ")[1].split(" s")[0]
+            assert _printed(flight, float(r["flight_s"])), speed
+        cheapest = min(best.values())[1]
+        named = {"walk": "walk", "pendular run": "pendular run", "run": "run"}
+        expected = named.get(cheapest, "run sequence, flight at the floor (a walk)")
+        assert optimal == expected, speed
+    # The README's bounds over the certified rows: returns within 2.8e-9, discretisation error
+    # <= 5.2e-9, work-energy residual <= 2.1e-10 J (each the largest, as printed).
+    good = [r for r in rows.values() if r["certified"] == "True"]
+    assert _printed("2.8e-9", max(float(r["return_error"]) for r in good))
+    assert _printed("5.2e-9", max(float(r["discretisation_error"]) for r in good))
+    assert _printed("2.1e-10", max(abs(float(r["energy_residual_J"])) for r in good))
