@@ -14,6 +14,7 @@ from .compass_gait import CompassGait
 from .five_link_biped import FiveLinkBiped
 from .kneed_walker import KneedWalker
 from .line_juggler import LineJuggler
+from .minimal_biped import MinimalBipedRun, MinimalBipedWalk
 from .one_d_hopper import OneDHopper
 from .planar_juggler import PlanarJuggler
 from .planar_quadruped import PlanarQuadruped, PlanarQuadrupedPronk
@@ -44,6 +45,8 @@ __all__ = [
     "CompassGait",
     "KneedWalker",
     "LineJuggler",
+    "MinimalBipedRun",
+    "MinimalBipedWalk",
     "OneDHopper",
     "FiveLinkBiped",
     "PlanarJuggler",
@@ -82,6 +85,8 @@ REGISTRY: dict[str, type[HybridModel]] = {
         PlanarQuadruped,
         PlanarQuadrupedPronk,
         BipedRunner,
+        MinimalBipedWalk,
+        MinimalBipedRun,
     )
 }
 
