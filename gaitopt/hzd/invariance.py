@@ -66,7 +66,9 @@ def _guard_and_reset(model: VirtualConstraintModel):
     )
 
 
-def pre_impact_state(model: VirtualConstraintModel, theta_dot: float = 1.0) -> tuple[float, np.ndarray]:
+def pre_impact_state(
+    model: VirtualConstraintModel, theta_dot: float = 1.0
+) -> tuple[float, np.ndarray]:
     """``(θ⁻, x⁻)``: where the guard meets the constraint surface's end (``s = 1`` shape, the
     phase variable free), by Newton on the guard from ``model.theta_minus``; ``x⁻`` with rate
     ``θ̇⁻ = theta_dot`` (rad/s)."""
@@ -76,7 +78,7 @@ def pre_impact_state(model: VirtualConstraintModel, theta_dot: float = 1.0) -> t
 
     def at(theta: float) -> np.ndarray:
         q = np.linalg.solve(T, np.r_[alpha_end, theta])
-        tail = surface_state(model, model.theta_minus, theta_dot)[len(q):]
+        tail = surface_state(model, model.theta_minus, theta_dot)[len(q) :]
         return np.r_[q, tail]
 
     theta = float(model.theta_minus)

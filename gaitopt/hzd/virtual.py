@@ -40,7 +40,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import GaitoptInputError, ParameterError
-from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
+from ..hybrid import HybridModel, Phase, Section, Symbols
 from ..mechanics import solve_small
 from ..parameters import parameter
 from .bezier import bezier
@@ -71,7 +71,9 @@ def plant_of(model: HybridModel | type) -> type:
     (module docstring); :class:`~gaitopt.errors.GaitoptInputError` naming what is missing."""
     cls = model if isinstance(model, type) else type(model)
     missing = [
-        k for k in ("manipulator", "actuated_coordinates", "plant_parameters") if not hasattr(cls, k)
+        k
+        for k in ("manipulator", "actuated_coordinates", "plant_parameters")
+        if not hasattr(cls, k)
     ]
     if missing:
         raise GaitoptInputError(
@@ -86,7 +88,7 @@ def _phase_vector(cls: type, phase_variable: Mapping[str, float] | None) -> tupl
     states = cls.declared_states or cls._structure().phases[0].states
     n = len(states) // 2
     config = states[:n]
-    given = dict(phase_variable if phase_variable is not None else getattr(cls, "phase_variable"))
+    given = dict(phase_variable if phase_variable is not None else cls.phase_variable)
     unknown = [k for k in given if k not in config]
     if unknown or not given:
         raise GaitoptInputError(
@@ -128,11 +130,11 @@ class VirtualConstraintModel(HybridModel):
             for j in self.joints
         }
 
-    def with_alpha(self, alpha: Mapping[str, np.ndarray], **changes: float) -> VirtualConstraintModel:
+    def with_alpha(
+        self, alpha: Mapping[str, np.ndarray], **changes: float
+    ) -> VirtualConstraintModel:
         """A copy with the coefficients of ``alpha`` (by joint, rad) and other ``changes``."""
-        values = {
-            alpha_name(j, k): float(v) for j, col in alpha.items() for k, v in enumerate(col)
-        }
+        values = {alpha_name(j, k): float(v) for j, col in alpha.items() for k, v in enumerate(col)}
         return self.replace(**values, **changes)
 
     @property
@@ -303,8 +305,10 @@ def virtual_constraint_model(
         from ``plant.virtual_constraint_defaults(degree)`` where the plant declares it.
     """
     cls = plant_of(plant)
-    if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or not (
-        MIN_DEGREE <= degree <= MAX_DEGREE
+    if (
+        isinstance(degree, bool)
+        or not isinstance(degree, (int, np.integer))
+        or not (MIN_DEGREE <= degree <= MAX_DEGREE)
     ):
         raise GaitoptInputError(
             f"degree: {degree!r} is not an integer from {MIN_DEGREE} to {MAX_DEGREE}; Bézier "

@@ -215,7 +215,6 @@ def restricted_map(model: VirtualConstraintModel, points: int = 401) -> Restrict
     )
 
 
-
 def fixed_point_state(model: VirtualConstraintModel, rmap: RestrictedMap) -> np.ndarray:
     """The post-impact state of the HZD gait (rad, rad/s): on the surface at ``θ⁺`` with
     ``σ⁺ = δ_zero √(2 ζ*)``, ``θ̇⁺ = σ⁺ / I(θ⁺)`` — the full-order closed loop's fixed point
