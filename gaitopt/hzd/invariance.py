@@ -18,6 +18,8 @@ of the configuration, e.g. the three-link walker's ``θ1 = θ_i``) meets the sur
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..errors import GaitoptInputError
@@ -44,18 +46,21 @@ def _T(model: VirtualConstraintModel) -> np.ndarray:
     return T
 
 
-def surface_state(model: VirtualConstraintModel, theta: float, theta_dot: float) -> np.ndarray:
+def surface_state(model: VirtualConstraintModel, theta: Any, theta_dot: Any) -> np.ndarray:
     """The state on the constraint surface ``(Φ(θ), Φ'(θ) θ̇)`` (rad, rad/s) at phase variable
-    ``θ`` (rad) and rate ``θ̇`` (rad/s)."""
+    ``θ`` (rad) and rate ``θ̇`` (rad/s): ``(2N,)`` for scalars, ``(2N, K)`` for arrays of K."""
     T = _T(model)
     span = model.theta_minus - model.theta_plus
-    s = (theta - model.theta_plus) / span
+    th = np.atleast_1d(np.asarray(theta, dtype=float))
+    rate = np.broadcast_to(np.asarray(theta_dot, dtype=float), th.shape)
+    s = (th - model.theta_plus) / span
     alpha = model.alpha
     h = np.array([bezier(alpha[j], s) for j in model.joints])
     dh = np.array([bezier_derivative(alpha[j], s) for j in model.joints]) / span
-    q = np.linalg.solve(T, np.r_[h, theta])
-    tangent = np.linalg.solve(T, np.r_[dh, 1.0])
-    return np.r_[q, tangent * theta_dot]
+    q = np.linalg.solve(T, np.vstack([h, th]))
+    tangent = np.linalg.solve(T, np.vstack([dh, np.ones_like(th)]))
+    out = np.vstack([q, tangent * rate])
+    return out[:, 0] if np.ndim(theta) == 0 else out
 
 
 def _guard_and_reset(model: VirtualConstraintModel):
