@@ -205,3 +205,35 @@ def test_cli_json_and_bad_input():
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--degree" in bad.stderr
     bad = _cli("solve", "compass_gait", "--controller", "hzd")
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "MODEL" in bad.stderr
+
+
+def test_surface_gait_by_quadrature_matches_the_full_order_gait(invariant_gait):
+    # gaitopt.hzd.design.surface_gait (Simpson on 201 phases, no simulation) against the
+    # certified full-order gait: step time 1e-6 s (quadrature error ~1e-7), slope = μ₁ 1e-7, max
+    # |u| 1e-4 N·m (grid vs the shooting's samples), and ∫‖u‖² dt against an independent
+    # DOP853 integration of the closed loop with the effort as an extra state (rtol 1e-11), to
+    # the guard: 1e-6 relative.
+    from scipy.integrate import solve_ivp
+
+    from gaitopt.hzd.design import surface_gait
+
+    g = invariant_gait
+    sg = surface_gait(g.model)
+    assert sg.walks
+    assert sg.step_time == pytest.approx(g.cycle.period, abs=1e-6)
+    assert sg.slope == pytest.approx(g.rmap.slope, abs=1e-12)
+    assert sg.max_torque == pytest.approx(g.max_torque, abs=1e-4)
+    m, phase = g.model, g.model.phases[0]
+
+    def rhs(t, y):
+        dx = np.asarray(phase.flow(y[:6], [], m.p), dtype=float).ravel()
+        return np.r_[dx, np.sum(m.torques(y[:6]) ** 2)]
+
+    def hit(t, y):
+        return float(phase.transitions[0].guard(y[:6], [], m.p))
+
+    hit.terminal, hit.direction = True, 1
+    sol = solve_ivp(rhs, (0, 10), np.r_[g.cycle.x, 0.0], method="DOP853", rtol=1e-11,
+                    atol=1e-11, events=hit)  # fmt: skip
+    assert sol.t[-1] == pytest.approx(g.cycle.period, abs=1e-8)
+    assert sg.cost * sg.step_length == pytest.approx(sol.y[6, -1], rel=1e-6)
