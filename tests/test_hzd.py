@@ -237,3 +237,27 @@ def test_surface_gait_by_quadrature_matches_the_full_order_gait(invariant_gait):
                     atol=1e-11, events=hit)  # fmt: skip
     assert sol.t[-1] == pytest.approx(g.cycle.period, abs=1e-8)
     assert sg.cost * sg.step_length == pytest.approx(sol.y[6, -1], rel=1e-6)
+
+
+def test_the_five_link_biped_closes_the_loop_too():
+    # "Any actuated model": the five-link biped (an open loop in its four torques) under degree-5
+    # constraints, phase variable (q1 + q2)/2.  I/O linearisation against central differences of
+    # ẏ along the flow (h = 1e-5, 1e-4 at these gains); its own constraints (swing-foot
+    # clearance, stance-foot push) carry over, evaluated with the feedback torques; and with no
+    # gait of its own to fit, hzd_gait asks for the coefficients (one line naming alpha).
+    plant = gaitopt.model("five_link_biped")
+    model = virtual_constraint_model(plant, 5)(omega_n=6.0, zeta=1.0)
+    assert [c.name for c in model.phases[0].constraints] == [
+        "swing foot above the ground",
+        "stance foot pushes on the ground",
+    ]
+    flow = model.phases[0].flow
+    rng = np.random.default_rng(7)
+    for _ in range(3):
+        x = np.r_[rng.uniform(-0.3, 0.3, 5), rng.normal(size=5)]
+        f = np.asarray(flow(x, [], model.p), dtype=float).ravel()
+        y, dy = model.outputs(x)
+        ddy = (model.outputs(x + 1e-5 * f)[1] - model.outputs(x - 1e-5 * f)[1]) / 2e-5
+        np.testing.assert_allclose(ddy, -36.0 * y - 12.0 * dy, atol=1e-4)
+    with pytest.raises(GaitoptInputError, match="^alpha: five_link_biped has no gait"):
+        hzd_gait(plant, 5)

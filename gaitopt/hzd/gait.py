@@ -160,7 +160,8 @@ def hzd_gait(
     invariant : bool
         Make the constraints hybrid invariant (default True).
     torque_limit : float, optional
-        Bound on every ``|u_i|`` (N·m, > 0): a gait that needs more is ``success: False``.
+        Bound on every ``|u_i|`` (N·m, > 0): a gait that needs more is ``success: False``;
+        default the plant's declared ``input_bounds`` (the five-link biped's 100 N·m), if any.
     """
     cls = virtual_constraint_model(plant_of(plant), degree, phase_variable)
     for name, value in (("omega_n", omega_n), ("zeta", zeta), ("torque_limit", torque_limit)):
@@ -169,7 +170,14 @@ def hzd_gait(
     changes = {k: getattr(plant, k) for k in cls.plant.plant_parameters}
     changes.update({k: v for k, v in (("omega_n", omega_n), ("zeta", zeta)) if v is not None})
     model = cls(**changes)
+    if torque_limit is None and plant.input_bounds:
+        torque_limit = min(max(abs(lo), abs(hi)) for lo, hi in plant.input_bounds.values())
     if alpha is None:
+        if not plant.passive_gait:
+            raise GaitoptInputError(
+                f"alpha: {plant.name} has no gait of its own to fit the constraints to; give "
+                f"the Bézier coefficients (hzd_gait(..., alpha=...))"
+            )
         start = find_limit_cycle(plant)
         if not start.success:
             raise GaitoptInputError(

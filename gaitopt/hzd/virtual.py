@@ -18,8 +18,10 @@ so ``ÿ + K_d ẏ + K_p y = 0`` along the flow.  The closed loop is a :class:`Hy
 range ``theta_plus``, ``theta_minus`` and the Bézier coefficients ``alpha_<joint>_<k>``, so
 ``find_limit_cycle``, the Floquet multipliers, continuation and the independent simulation work
 on it unchanged.  Guards, resets, falls and the section are the plant model's own (phase 0,
-whose guards and resets do not depend on the input); the one unilateral condition is the
-plant's ground reaction ``N ≥ 0`` evaluated with the closed loop's ``q̈``.
+whose guards and resets see the feedback torques); the unilateral conditions are the plant's own
+where the plant is an open loop in the torques (its ``inputs`` are them: the five-link biped),
+else the plant's ground reaction ``N ≥ 0`` with the closed loop's ``q̈`` (the three-link walker,
+itself a closed loop).
 
 **The plant protocol.**  A model class is a plant if it declares :meth:`manipulator`
 (``(q, q̇, u, p) -> (D, rhs)``, rhs affine in ``u``), ``actuated_coordinates`` (names of ``N − 1``
@@ -223,7 +225,12 @@ class VirtualConstraintModel(HybridModel):
         qdd = ca.cse(drift + gain @ torque)
         flow = sym.function("flow", x, ca.vertcat(qd, qdd))
 
-        u0 = ca.DM.zeros(len(plant.inputs), 1)
+        # A plant whose own inputs are the torques (an open-loop model: the five-link biped)
+        # has phase functions of u: they see the feedback torques, and its constraints carry
+        # over.  A plant that is itself a closed loop (the three-link walker, no inputs) has
+        # functions of the state only; its one constraint is rebuilt from ground_reaction.
+        open_loop = len(plant.inputs) == m_in
+        u0 = torque if open_loop else ca.DM.zeros(len(plant.inputs), 1)
 
         def wrap(name: str, f: ca.Function | None) -> ca.Function | None:
             return None if f is None else sym.function(name, x, f(x, u0, pb))
@@ -237,8 +244,13 @@ class VirtualConstraintModel(HybridModel):
             )
             for t in phase0.transitions
         )
-        constraints = ()
-        if hasattr(plant, "ground_reaction"):
+        constraints: tuple = ()
+        if open_loop:
+            constraints = tuple(
+                dataclasses.replace(c, function=wrap("constraint", c.function))
+                for c in phase0.constraints
+            )
+        elif hasattr(plant, "ground_reaction"):
             push = plant.ground_reaction()(q, qd, qdd, pb)
             constraints = (
                 sym.constraint(
