@@ -145,6 +145,22 @@ def _run_hzd(model, args: argparse.Namespace) -> int:
     from ..errors import GaitoptInputError
     from ..hzd.gait import hzd_gait
 
+    unused = [
+        option
+        for option, used in (
+            ("--guess", bool(args.guess)),
+            ("--steps", args.steps != 1),
+            ("--starts", args.starts != 1),
+            ("--method", args.method != "newton"),
+            ("--scheduler", args.scheduler is not None),
+        )
+        if used
+    ]
+    if unused:
+        raise InputError(
+            f"{unused[0]}: not used with --controller hzd (the gait starts from the zero "
+            f"dynamics' fixed point, one step, Newton); leave it out"
+        )
     phase = None
     if args.phase_variable:
         phase = {}
