@@ -52,6 +52,30 @@ def _solve_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--seed", type=_count(0), default=0, help="seed of the multi-start sample (default 0)"
     )
+    hzd = parser.add_argument_group(
+        "virtual constraints (an actuated model with a manipulator form, e.g. three_link_walker)"
+    )
+    hzd.add_argument(
+        "--controller",
+        choices=("hzd",),
+        default=None,
+        help="close the loop with Bézier virtual constraints fitted to the model's gait, made "
+        "hybrid invariant, with the zero dynamics' restricted map (gaitopt.hzd)",
+    )
+    hzd.add_argument("--degree", type=int, default=4, metavar="M",
+                     help="Bézier degree of every output, 3 to 20 (default 4)")  # fmt: skip
+    hzd.add_argument(
+        "--phase-variable",
+        action="append",
+        metavar="STATE=C",
+        help="θ = Σ C·STATE of configuration states (repeatable; default the model's)",
+    )
+    hzd.add_argument("--omega-n", type=float, default=None, metavar="W",
+                     help="gain ω_n (rad/s, > 0): K_p = ω_n², K_d = 2ζω_n")  # fmt: skip
+    hzd.add_argument("--zeta", type=float, default=None, metavar="Z",
+                     help="damping ratio ζ (> 0)")  # fmt: skip
+    hzd.add_argument("--torque-limit", type=float, default=None, metavar="NM",
+                     help="refuse a gait that needs more than this |u| (N·m)")  # fmt: skip
     parser.add_argument(
         "--scheduler",
         type=_scheduler_address,
@@ -88,6 +112,8 @@ def _print_cycle(cycle: LimitCycle) -> None:
 def run_solve(args: argparse.Namespace) -> int:
     """``gaitopt solve``: find a gait by multiple shooting, with its multipliers."""
     model = build_model(args.model, args.set)
+    if args.controller == "hzd":
+        return _run_hzd(model, args)
     guess = parse_guess(model, args.guess)
     try:
         with _solver_output_to_stderr():
@@ -111,3 +137,76 @@ def run_solve(args: argparse.Namespace) -> int:
     else:
         _print_cycle(cycle)
     return EXIT_OK if cycle.success else EXIT_NOT_FOUND
+
+
+def _run_hzd(model, args: argparse.Namespace) -> int:
+    """``solve --controller hzd``: the HZD gait of ``model`` (:func:`gaitopt.hzd.gait.hzd_gait`);
+    every bad argument is one line naming the option (exit 2)."""
+    from ..errors import GaitoptInputError
+    from ..hzd.gait import hzd_gait
+
+    unused = [
+        option
+        for option, used in (
+            ("--guess", bool(args.guess)),
+            ("--steps", args.steps != 1),
+            ("--starts", args.starts != 1),
+            ("--method", args.method != "newton"),
+            ("--scheduler", args.scheduler is not None),
+        )
+        if used
+    ]
+    if unused:
+        raise InputError(
+            f"{unused[0]}: not used with --controller hzd (the gait starts from the zero "
+            f"dynamics' fixed point, one step, Newton); leave it out"
+        )
+    phase = None
+    if args.phase_variable:
+        phase = {}
+        for item in args.phase_variable:
+            name, sep, value = item.partition("=")
+            try:
+                phase[name.strip()] = float(value)
+            except ValueError:
+                sep = ""
+            if not sep:
+                raise InputError(
+                    f"--phase-variable {item}: expected STATE=COEFFICIENT, e.g. stance=1"
+                ) from None
+    options = {
+        "degree": "--degree",
+        "phase_variable": "--phase-variable",
+        "omega_n": "--omega-n",
+        "zeta": "--zeta",
+        "torque_limit": "--torque-limit",
+        "model": "MODEL",
+    }
+    try:
+        with _solver_output_to_stderr():
+            gait = hzd_gait(model, args.degree, phase_variable=phase, omega_n=args.omega_n,
+                            zeta=args.zeta, torque_limit=args.torque_limit)  # fmt: skip
+    except GaitoptInputError as exc:
+        text = str(exc)
+        key = text.split(":", 1)[0]
+        option = options.get(key)
+        raise InputError(
+            text if option is None else f"{option}: {text.split(':', 1)[1].strip()}"
+        ) from None
+    if args.json:
+        _print_json(gait.as_dict())
+    else:
+        if gait.cycle is not None:
+            _print_cycle(gait.cycle)
+        rm = gait.rmap
+        _print_rows(
+            [
+                ("controller", f"hzd, degree {gait.model.degree}, ω_n = {gait.model.omega_n:g}, "
+                               f"ζ = {gait.model.zeta:g}"),
+                ("restricted map", f"ζ* = {rm.fixed_point}, slope δ² = {rm.slope:.8g}"),
+                ("invariance residual", f"{gait.invariance_residual:.2e} rad"),
+                ("max |u|", "null" if gait.max_torque is None else f"{gait.max_torque:.6g} N·m"),
+                ("success", f"{gait.success}: {gait.message}"),
+            ]
+        )  # fmt: skip
+    return EXIT_OK if gait.success else EXIT_NOT_FOUND

@@ -273,6 +273,33 @@ class FiveLinkBiped(HybridModel):
         "swing_knee": ("swing_thigh", "swing_shank"),
     }
 
+    #: The plant for a virtual-constraint controller (:mod:`gaitopt.hzd`): :meth:`manipulator`
+    #: is its open loop in the four torques; outputs on the four links other than the stance
+    #: shank, phase variable the stance leg's mean angle (q1 + q2)/2 (decreasing over a step).
+    actuated_coordinates: ClassVar[tuple[str, ...]] = (
+        "stance_thigh",
+        "torso",
+        "swing_thigh",
+        "swing_shank",
+    )
+    phase_variable: ClassVar[dict[str, float]] = {"stance_shank": 0.5, "stance_thigh": 0.5}
+    plant_parameters: ClassVar[tuple[str, ...]] = (
+        "mass_shank",
+        "mass_thigh",
+        "mass_torso",
+        "inertia_shank",
+        "inertia_thigh",
+        "inertia_torso",
+        "length_shank",
+        "length_thigh",
+        "length_torso",
+        "com_shank",
+        "com_thigh",
+        "com_torso",
+        "gravity",
+        "slope",
+    )
+
     mass_shank: float = _mass(3.2, "shank (tibia) mass m1 = m5")
     mass_thigh: float = _mass(6.8, "thigh (femur) mass m2 = m4")
     mass_torso: float = _mass(20.0, "torso mass m3")

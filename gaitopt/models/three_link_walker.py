@@ -238,6 +238,24 @@ class ThreeLinkWalker(HybridModel):
     #: Names of the torques (columns of :meth:`torques`), N·m.
     torque_names: ClassVar[tuple[str, str]] = ("stance_hip_torque", "swing_hip_torque")
 
+    #: The open-loop plant, for a virtual-constraint controller of one's own
+    #: (:mod:`gaitopt.hzd`): the configuration ``q = (θ1, θ2, θ3)`` is the first three states,
+    #: :meth:`manipulator` its equations ``D q̈ + C q̇ + G = B u``; the outputs act on the
+    #: swing leg and the torso, the phase variable by default is the stance-leg angle ``θ1``
+    #: (monotonic over a step: from −θ_i to +θ_i), and the plant's parameters are these (the
+    #: others are this model's fixed-constraint controller's).
+    actuated_coordinates: ClassVar[tuple[str, ...]] = ("swing", "torso")
+    phase_variable: ClassVar[dict[str, float]] = {"stance": 1.0}
+    plant_parameters: ClassVar[tuple[str, ...]] = (
+        "leg_length",
+        "mass_leg",
+        "mass_hip",
+        "mass_torso",
+        "torso_length",
+        "gravity",
+        "impact_angle",
+    )
+
     leg_length: float = _length(1.0, "leg length r (foot to hip)")
     mass_leg: float = _mass(5.0, "leg point mass m, at mid-leg")
     mass_hip: float = _mass(15.0, "hip point mass M_H")
@@ -374,6 +392,49 @@ class ThreeLinkWalker(HybridModel):
             "torso_dot": 1.656,
         }
 
+    # -- the open-loop plant (for gaitopt.hzd) -----------------------------------------------
+    @classmethod
+    def manipulator(cls) -> ca.Function:
+        """``manipulator(q, qd, u, p) -> (D, rhs)``: the open loop ``D(q) q̈ = rhs = B u −
+        C(q, q̇) q̇ − G(q)`` of Grizzle et al. 2001 (D in kg·m², rhs in N·m; ``u`` the two
+        torques, N·m), for a controller of one's own (:mod:`gaitopt.hzd`)."""
+        if cls not in _PLANT:
+            sym = Symbols(cls.parameter_specs(), cls.inputs)
+            q, qd, u = ca.SX.sym("q", 3), ca.SX.sym("qd", 3), ca.SX.sym("u", 2)
+            D, C, G = _terms(sym, q, qd)
+            rhs = ca.DM(INPUT_MATRIX) @ u - C @ qd - G
+            masses = _geometry(sym, q)["masses"]
+            qdd = ca.SX.sym("qdd", 3)
+            _PLANT[cls] = (
+                ca.Function("manipulator", [q, qd, u, sym.p], [D, rhs], ["q", "qd", "u", "p"],
+                            ["M", "rhs"]),
+                ca.Function("ground_reaction", [q, qd, qdd, sym.p],
+                            [contact_force(masses, q, qd, qdd, sym.gravity)[1]],
+                            ["q", "qd", "qdd", "p"], ["N"]),
+            )  # fmt: skip
+        return _PLANT[cls][0]
+
+    @classmethod
+    def virtual_constraint_defaults(cls, degree: int) -> dict[str, float]:
+        """Bézier coefficients (rad) of degree ``degree`` that are this model's fixed
+        constraints exactly: with ``θ = θ1`` from ``θ⁺ = −θ_i`` to ``θ⁻ = θ_i``, the swing leg
+        ``θ2 = −θ1`` is linear in ``s`` (``α_k = θ_i (1 − 2k/M)``) and the torso constant
+        (``α_k = θ3d = π/8``); ``ω_n = 5``, ``ζ = 1.1`` as issue 20's (rad/s, 1)."""
+        ti = math.pi / 8
+        out = {"omega_n": 5.0, "zeta": 1.1, "theta_plus": -ti, "theta_minus": ti}
+        for k in range(degree + 1):
+            out[f"alpha_swing_{k}"] = ti * (1 - 2 * k / degree)
+            out[f"alpha_torso_{k}"] = math.pi / 8
+        return out
+
+    @classmethod
+    def ground_reaction(cls) -> ca.Function:
+        """``ground_reaction(q, qd, qdd, p) -> N``: the normal force of the ground on the
+        stance foot (N) for any acceleration ``q̈`` (Newton's law of the point masses), the
+        unilateral condition ``N ≥ 0`` of a controller of one's own."""
+        cls.manipulator()
+        return _PLANT[cls][1]
+
     # -- outputs of the closed loop ----------------------------------------------------------
     def _function(self, name: str) -> ca.Function:
         self.structure()
@@ -444,6 +505,7 @@ class ThreeLinkWalker(HybridModel):
 
 
 _FUNCTIONS: dict[type, dict[str, ca.Function]] = {}
+_PLANT: dict[type, tuple[ca.Function, ca.Function]] = {}
 
 
 def _functions(sym, x, q, qd, loop, geo, post) -> dict[str, ca.Function]:
