@@ -87,7 +87,7 @@ def plant_of(model: HybridModel | type) -> type:
 
 def _phase_vector(cls: type, phase_variable: Mapping[str, float] | None) -> tuple[float, ...]:
     """``c`` of ``θ = c·q`` from ``{state: coefficient}`` (default: the plant's own)."""
-    states = cls.declared_states or cls._structure().phases[0].states
+    states = cls.declared_states or cls.structure().phases[0].states
     n = len(states) // 2
     config = states[:n]
     given = dict(phase_variable if phase_variable is not None else cls.phase_variable)
@@ -156,7 +156,7 @@ class VirtualConstraintModel(HybridModel):
 
     # -- numeric functions ---------------------------------------------------------------------
     def _call(self, name: str, *args: Any) -> Any:
-        self._structure()
+        self.structure()
         return self._functions[name](*args, self.p)
 
     def torques(self, x: np.ndarray) -> np.ndarray:
@@ -185,7 +185,7 @@ class VirtualConstraintModel(HybridModel):
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
         plant = cls.plant
-        base = plant._structure()
+        base = plant.structure()
         phase0 = base.phases[0]
         states = phase0.states
         n = len(states) // 2
