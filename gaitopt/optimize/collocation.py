@@ -57,6 +57,8 @@ import numpy as np
 
 from ..errors import GaitoptInputError
 from ..hybrid import rate_along
+from ..kernels.nodes import node_function, node_kernels
+from .nodes import NodeBlock, substitute
 from .problem import GaitProblem
 from .radau import (
     COAST,
@@ -114,6 +116,11 @@ def _implicit_dynamics(model: Any) -> ca.Function | None:
 class Collocation:
     """The nonlinear program of a :class:`GaitProblem` on a :class:`RadauMesh`.
 
+    The equations repeated at every collocation node (the dynamics, the phase's unilateral
+    constraints) are the node function of :mod:`gaitopt.kernels.nodes`: ``node_blocks`` say where
+    (:mod:`gaitopt.optimize.nodes`), ``outer`` is ``(f, g)`` with their outputs as symbols, and
+    the solver assembles the exact derivatives from the compiled node kernels.
+
     Attributes
     ----------
     nlp : dict
@@ -124,6 +131,10 @@ class Collocation:
     groups : list of Group
         The constraint blocks, named for messages and the active set.
     """
+
+    #: Transcribe the nodes with the node kernels (False: the whole NLP is one CasADi graph,
+    #: differentiated by CasADi; the same NLP, for comparisons).
+    use_node_kernels = True
 
     def __init__(
         self, problem: GaitProblem, mesh: RadauMesh, structure: list[list[Arc]] | None = None
@@ -153,6 +164,7 @@ class Collocation:
         self.section_index = [states0.index(c) for c in section.coordinates]
 
         self.implicit = _implicit_dynamics(model) if len(phases) == 1 else None
+        self.node_blocks: list[NodeBlock] = []
         B = _Blocks()
         self.blocks = B
         lo0, hi0 = problem.state_bounds_of(0)
@@ -236,15 +248,21 @@ class Collocation:
                     continue
                 name = model.inputs[r]
                 add(f"impulse '{name}' held over {label}", Uk[r, :-1] - Uk[r, -1])
+            Ak = B.syms[B.names.index(f"A{k}")] if self.implicit is not None else None
+            Yk = self._node_block(i, Xc, Uk, Ak, p)
             if self.implicit is None:
-                F = phase.flow.map(N * d)(Xc, Uk, p)
+                F = phase.flow.map(N * d)(Xc, Uk, p) if Yk is None else Yk[: phase.n, :]
             else:  # ẋ = (q̇, a) with M(q) a = rhs(q, q̇, u) as constraints
                 nq = phase.n // 2
-                Ak = B.syms[B.names.index(f"A{k}")]
-                M, rhs = self.implicit.map(N * d)(Xc[:nq, :], Xc[nq:, :], Uk, p)
-                Ms = ca.horzsplit(M, nq)
-                balance = [ca.mtimes(Ms[c], Ak[:, c]) - rhs[:, c] for c in range(N * d)]
-                add(f"equations of motion ({label})", ca.horzcat(*balance))
+                if Yk is None:
+                    M, rhs = self.implicit.map(N * d)(Xc[:nq, :], Xc[nq:, :], Uk, p)
+                    Ms = ca.horzsplit(M, nq)
+                    balance = ca.horzcat(
+                        *[ca.mtimes(Ms[c], Ak[:, c]) - rhs[:, c] for c in range(N * d)]
+                    )
+                else:
+                    balance = Yk[:nq, :]
+                add(f"equations of motion ({label})", balance)
                 F = ca.vertcat(Xc[nq:, :], Ak)
             defects = []
             for j in range(N):
@@ -276,13 +294,17 @@ class Collocation:
                 )
             u_start = ca.mtimes(Uk[:, :d], ca.DM(self.u_at_start))
             margin, margin0 = self._clearance_margin(T, hs, k)
-            for c in getattr(phase, "constraints", ()):
+            first_row = phase.n // 2 if self.implicit is not None else phase.n
+            for r, c in enumerate(getattr(phase, "constraints", ())):
                 nodes = Xk[:, 1:-1] if c.at_end else Xk[:, 1:]
                 unodes = Uk[:, :-1] if c.at_end else Uk
                 # A length (a foot's height) keeps the problem's clearance margin.
                 lift = margin if c.unit == "m" else ca.MX.zeros(1, N * d)
                 if nodes.shape[1]:
-                    values = c.function.map(nodes.shape[1])(nodes, unodes, p)
+                    if Yk is None:
+                        values = c.function.map(nodes.shape[1])(nodes, unodes, p)
+                    else:  # the node kernel's row of this constraint
+                        values = Yk[first_row + r, : nodes.shape[1]]
                     values = values - (lift[:, :-1] if c.at_end else lift)
                     add(f"'{c.name}' ({label})", values, 0.0, np.inf)
                 if c.at_start:
@@ -451,7 +473,16 @@ class Collocation:
             # Positive work alone leaves singular arcs (inputs that chatter between the nodes);
             # a small effort term selects a smooth optimum.  The reported cost is J alone.
             objective = J + problem.regularisation * ca.sum1(ca.vertcat(*effort_terms))
-        self.nlp = {"x": w, "p": p_in, "f": objective, "g": ca.vertcat(*g)}
+        g_all = ca.vertcat(*g)
+        positive_work = ca.sum1(ca.vertcat(*work_terms)) if work else ca.MX(np.nan)
+        # The node outputs Y stand for the node function at the nodes (gaitopt.optimize.nodes):
+        # the solver assembles its derivatives from compiled kernels; everyone else sees the
+        # ordinary graph.
+        self.outer = (objective, g_all)
+        objective, g_all, J, positive_work = substitute(
+            self.node_blocks, [objective, g_all, J, positive_work]
+        )
+        self.nlp = {"x": w, "p": p_in, "f": objective, "g": g_all}
         self.lbx = np.concatenate(B.lb)
         self.ubx = np.concatenate(B.ub)
         self.lbg = np.concatenate(lbg)
@@ -461,10 +492,31 @@ class Collocation:
             "period": period,
             "distance": total,
             "p_used": p,
-            "positive_work": ca.sum1(ca.vertcat(*work_terms)) if work else ca.MX(np.nan),
+            "positive_work": positive_work,
         }
         self._X, self._U, self._T = X, U, T
         self._theta = Th
+
+    def _node_block(self, i: int, Xc: Any, Uk: Any, Ak: Any, p: Any) -> ca.MX | None:
+        """The node outputs ``Y`` (dynamics rows, then one row per unilateral constraint) of a
+        phase of model phase ``i`` at its ``N·d`` collocation points (``Xc``, ``Uk``, ``Ak``:
+        their states, inputs, accelerations), a block of :mod:`gaitopt.optimize.nodes`; None
+        where the node function cannot be built in SX or :attr:`use_node_kernels` is off."""
+        if not self.use_node_kernels:
+            return None
+        phase = self.model.phases[i]
+        constraints = tuple(c.function for c in getattr(phase, "constraints", ()))
+        try:
+            node = node_function(phase.flow, constraints, self.implicit)
+        except (TypeError, RuntimeError, NotImplementedError):
+            return None
+        label = f"{type(self.model).__name__.lower()}_{i}{'i' if self.implicit else 'e'}"
+        kernels = node_kernels(node, label)
+        count = Xc.shape[1]
+        parts = [Xc, Uk] + ([Ak] if Ak is not None else []) + [ca.repmat(p, 1, count)]
+        Y = ca.MX.sym(f"Y{len(self.node_blocks)}", node.size1_out(0), count)
+        self.node_blocks.append(NodeBlock(kernels, node, Y, ca.vertcat(*parts)))
+        return Y
 
     def _bound_arcs(self, k: int, Xk: Any, Uk: Any, p: Any, label: str, add: Any) -> None:
         """The arcs of active input bounds for a cost without powers (least effort): on an

@@ -1,0 +1,112 @@
+"""Compiled node kernels of the Radau collocation: one collocation point's equations with their
+first and second derivatives, compiled once per model phase and kept in the kernel cache.
+
+A collocation NLP repeats the same nonlinear equations at every one of its ``N·d`` nodes: the
+dynamics there (``ẋ = f(x, u, p)``, or the implicit ``M(q) a − rhs(q, q̇, u, p)`` of a mechanical
+model) and the phase's unilateral constraints (a foot's height, a contact force).  Their exact
+Hessian, differentiated over the whole NLP, is the bulk of the first optimisation's time (the
+five-link biped: an SX Hessian of about a million instructions, built per mesh).  Here the node
+function ``y = node(z)``, ``z = [x; u; a; p]``, is differentiated once, symbolically:
+
+* ``node(z) -> y``;
+* ``node_jac(z) -> (y, ∂y/∂z)``;
+* ``node_hess(z, μ) -> ((∂y/∂z)ᵀ μ, ∇²_z (μᵀ y))``;
+
+compiled into one shared library (:func:`gaitopt.kernels.cache.load`; interpreted where there is
+no compiler), indexed by a hash of the node function's serialisation, this module's source, the
+CasADi version, the compiler and the flags: everything that determines the code.  The functions
+do not depend on the mesh, the bounds or the parameter values; :mod:`gaitopt.optimize.nodes`
+maps them over the nodes of any mesh.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from functools import lru_cache
+from pathlib import Path
+
+import casadi as ca
+
+from .cache import FLAGS, compiler, load
+
+__all__ = ["NodeKernels", "node_function", "node_kernels"]
+
+
+def node_function(
+    flow: ca.Function, constraints: tuple, implicit: ca.Function | None
+) -> ca.Function:
+    """``node(z) -> y`` of one phase at one collocation point (SX).
+
+    ``z = [x; u; a; p]`` (``a``: the accelerations of an implicit model, else empty) and
+    ``y = [dynamics; c₁; …]``: ``f(x, u, p)`` (explicit) or ``M(q) a − rhs(q, q̇, u, p)`` (implicit,
+    ``x = (q, q̇)``), then each unilateral constraint's value ``c(x, u, p)``.
+
+    Raises
+    ------
+    TypeError, RuntimeError, NotImplementedError
+        Where a model function cannot be evaluated on SX symbols.
+    """
+    n, nu, np_ = flow.size1_in(0), flow.size1_in(1), flow.size1_in(2)
+    nq = n // 2 if implicit is not None else 0
+    x, u, a, p = ca.SX.sym("x", n), ca.SX.sym("u", nu), ca.SX.sym("a", nq), ca.SX.sym("p", np_)
+    if implicit is not None:
+        M, rhs = implicit(x[:nq], x[nq:], u, p)
+        first = ca.mtimes(M, a) - rhs
+    else:
+        first = flow(x, u, p)
+    values = [c(x, u, p) for c in constraints]
+    y = ca.vertcat(first, *values)
+    if not isinstance(y, ca.SX):
+        raise TypeError("the node function is not an SX expression")
+    return ca.Function("node", [ca.vertcat(x, u, a, p)], [y], ["z"], ["y"])
+
+
+class NodeKernels:
+    """``node``, ``node_jac`` and ``node_hess`` of one node function (see the module docstring),
+    compiled (``compiled``) or interpreted."""
+
+    def __init__(self, node: ca.Function, label: str):
+        self.nz, self.ny = node.size1_in(0), node.size1_out(0)
+        name = f"gaitopt_nodes_{label}"
+        serial = node.serialize()
+        self.key = _key(name, serial)
+        loaded, self.compiled = load(name, lambda: _derivatives(node), key=self.key)
+        self.node, self.jac, self.hess = loaded
+
+
+def _derivatives(node: ca.Function) -> list[ca.Function]:
+    z = ca.SX.sym("z", node.size1_in(0))
+    mu = ca.SX.sym("mu", node.size1_out(0))
+    y = node(z)
+    J = ca.jacobian(y, z)
+    H, grad = ca.hessian(ca.dot(mu, y), z)
+    return [
+        ca.Function("node", [z], [y], ["z"], ["y"]),
+        ca.Function("node_jac", [z], [y, J], ["z"], ["y", "J"]),
+        ca.Function("node_hess", [z, mu], [grad, H], ["z", "mu"], ["grad", "H"]),
+    ]
+
+
+def _key(name: str, serial: str) -> str | None:
+    """Index key: the node function, this module, CasADi, the compiler and the flags."""
+    cc = compiler()
+    if cc is None:
+        return None
+    stat = os.stat(cc)
+    ident = "\n".join(
+        [name, serial, Path(__file__).read_text(), ca.__version__, cc, str(stat.st_size),
+         str(stat.st_mtime_ns), " ".join(FLAGS)]
+    )  # fmt: skip
+    return hashlib.sha256(ident.encode()).hexdigest()[:24]
+
+
+@lru_cache(maxsize=64)
+def _kernels(serial: str, label: str) -> NodeKernels:
+    return NodeKernels(ca.Function.deserialize(serial), label)
+
+
+def node_kernels(node: ca.Function, label: str) -> NodeKernels:
+    """The (cached in-process and on disk) kernels of a node function; ``label`` names the
+    library (``gaitopt_nodes_<label>``)."""
+    return _kernels(node.serialize(), label)
