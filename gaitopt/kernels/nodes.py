@@ -12,6 +12,9 @@ function ``y = node(z)``, ``z = [x; u; a; p]``, is differentiated once, symbolic
 * ``node_jac(z) -> (y, ∂y/∂z)``;
 * ``node_hess(z, μ) -> ((∂y/∂z)ᵀ μ, ∇²_z (μᵀ y))``;
 
+and, for the Floquet sensitivities of an optimum, a phase's ``flow_jac(x, u, p) -> (f, f_x, f_u)``
+(:func:`flow_jacobian`);
+
 compiled into one shared library (:func:`gaitopt.kernels.cache.load`; interpreted where there is
 no compiler), indexed by a hash of the node function's serialisation, this module's source, the
 CasADi version, the compiler and the flags: everything that determines the code.  The functions
@@ -30,7 +33,7 @@ import casadi as ca
 
 from .cache import FLAGS, compiler, load
 
-__all__ = ["NodeKernels", "node_function", "node_kernels"]
+__all__ = ["NodeKernels", "node_function", "node_kernels", "flow_jacobian"]
 
 
 def node_function(
@@ -110,3 +113,27 @@ def node_kernels(node: ca.Function, label: str) -> NodeKernels:
     """The (cached in-process and on disk) kernels of a node function; ``label`` names the
     library (``gaitopt_nodes_<label>``)."""
     return _kernels(node.serialize(), label)
+
+
+@lru_cache(maxsize=64)
+def _flow_jacobian(serial: str, label: str) -> ca.Function:
+    flow = ca.Function.deserialize(serial)
+    name = f"gaitopt_flowjac_{label}"
+
+    def build() -> list[ca.Function]:
+        n, nu, np_ = flow.size1_in(0), flow.size1_in(1), flow.size1_in(2)
+        x, u, p = ca.SX.sym("x", n), ca.SX.sym("u", nu), ca.SX.sym("p", np_)
+        f = flow(x, u, p)
+        if not isinstance(f, ca.SX):
+            raise TypeError("the flow is not an SX expression")
+        J = [ca.densify(ca.jacobian(f, v)) for v in (x, u)]
+        return [ca.Function("flow_jac", [x, u, p], [f, *J], ["x", "u", "p"], ["f", "f_x", "f_u"])]
+
+    (function,), _ = load(name, build, key=_key(name, serial))
+    return function
+
+
+def flow_jacobian(flow: ca.Function, label: str) -> ca.Function:
+    """``flow_jac(x, u, p) -> (f, f_x, f_u)`` of a phase's flow (dense Jacobians), compiled and
+    cached like the node kernels (``label`` names the library)."""
+    return _flow_jacobian(flow.serialize(), label)

@@ -132,7 +132,9 @@ def split_solver(
     Ym = ca.vertcat(*Y_vals)
     Y_wm = ca.mtimes(ca.diagcat(*Y_w), Z_wm)  # ∂Y/∂w
 
-    y_only = ca.vertcat(*[ca.vec(b.kernels.node.map(b.count)(z)) for b, z in zip(blocks, Zk)])
+    y_only = ca.vertcat(
+        *[ca.vec(b.kernels.node.map(b.count)(z)) for b, z in zip(blocks, Zk, strict=True)]
+    )
     g_val, G_w, G_Y = o_jac(wm, pm, Ym)
     jac_g = ca.Function(
         "nlp_jac_g", [wm, pm], [g_val, G_w + ca.mtimes(G_Y, Y_wm)], ["x", "p"], ["g", "jac_g_x"]
