@@ -1,7 +1,8 @@
 """``python -m gaitopt.kernels --warm [--jobs N] [MODEL ...]``: compile (or find in the cache) the
-shooting kernels and the verification's DOP853 steps of the built-in models, so that no later call
-waits for the compiler.  ``--jobs`` compiles that many models at once (default: the number of
-CPUs); the cache is safe for concurrent compiles."""
+shooting kernels, the verification's DOP853 steps and, for a model with inputs, the optimiser's
+node kernels and flow Jacobians (:func:`gaitopt.optimize.collocation.warm_kernels`) of the built-in
+models, so that no later call waits for the compiler.  ``--jobs`` compiles that many models at
+once (default: the number of CPUs); the cache is safe for concurrent compiles."""
 
 from __future__ import annotations
 
@@ -21,6 +22,10 @@ def _warm(name: str) -> tuple[str, str, float]:
     start = time.perf_counter()
     kern = model_kernels(REGISTRY[name])
     verification_steps(REGISTRY[name])  # the verification's DOP853 steps
+    if REGISTRY[name].inputs:  # the optimiser's node kernels and flow Jacobians
+        from ..optimize.collocation import warm_kernels
+
+        warm_kernels(REGISTRY[name]())
     how = "none (SX unavailable)" if kern is None else (
         "compiled" if kern.compiled else "interpreted")  # fmt: skip
     return name, how, time.perf_counter() - start

@@ -57,7 +57,7 @@ import numpy as np
 
 from ..errors import GaitoptInputError
 from ..hybrid import rate_along
-from ..kernels.nodes import node_function, node_kernels
+from ..kernels.nodes import flow_jacobian, node_function, node_kernels
 from .nodes import NodeBlock, substitute
 from .problem import GaitProblem
 from .radau import (
@@ -73,7 +73,7 @@ from .radau import (
     lagrange_matrix,
 )
 
-__all__ = ["RadauMesh", "Collocation", "lagrange_matrix", "Group", "Arc"]
+__all__ = ["RadauMesh", "Collocation", "lagrange_matrix", "Group", "Arc", "warm_kernels"]
 
 #: Uniform samples per mesh interval of the dense check of state bounds and limits
 #: (:meth:`Collocation.check_limits`): not the nodes, where they are imposed.
@@ -111,6 +111,39 @@ def _implicit_dynamics(model: Any) -> ca.Function | None:
     except (RuntimeError, np.linalg.LinAlgError):
         return None
     return f
+
+
+def phase_node_kernels(
+    model: Any, i: int, implicit: ca.Function | None
+) -> tuple[ca.Function, Any] | None:
+    """The node function of model phase ``i`` (with the implicit dynamics ``implicit``, if any)
+    and its compiled kernels (:mod:`gaitopt.kernels.nodes`); None where the model's functions
+    have no SX form."""
+    phase = model.phases[i]
+    constraints = tuple(c.function for c in getattr(phase, "constraints", ()))
+    try:
+        node = node_function(phase.flow, constraints, implicit)
+    except (TypeError, RuntimeError, NotImplementedError):
+        return None
+    label = f"{type(model).__name__.lower()}_{i}{'i' if implicit is not None else 'e'}"
+    return node, node_kernels(node, label)
+
+
+def warm_kernels(model: Any) -> bool:
+    """Compile (or find in the cache) the node kernels a transcription of ``model`` uses and
+    the flow Jacobians of its Floquet check (``python -m gaitopt.kernels --warm``); whether
+    every one is compiled."""
+    phases = model.phases
+    implicit = _implicit_dynamics(model) if len(phases) == 1 else None
+    compiled = True
+    for i, phase in enumerate(phases):
+        found = phase_node_kernels(model, i, implicit)
+        compiled = compiled and found is not None and found[1].compiled
+        try:
+            flow_jacobian(phase.flow, f"{type(model).__name__.lower()}_{i}")
+        except (TypeError, RuntimeError, NotImplementedError):
+            compiled = False
+    return compiled
 
 
 class Collocation:
@@ -504,14 +537,10 @@ class Collocation:
         where the node function cannot be built in SX or :attr:`use_node_kernels` is off."""
         if not self.use_node_kernels:
             return None
-        phase = self.model.phases[i]
-        constraints = tuple(c.function for c in getattr(phase, "constraints", ()))
-        try:
-            node = node_function(phase.flow, constraints, self.implicit)
-        except (TypeError, RuntimeError, NotImplementedError):
+        found = phase_node_kernels(self.model, i, self.implicit)
+        if found is None:
             return None
-        label = f"{type(self.model).__name__.lower()}_{i}{'i' if self.implicit else 'e'}"
-        kernels = node_kernels(node, label)
+        node, kernels = found
         count = Xc.shape[1]
         parts = [Xc, Uk] + ([Ak] if Ak is not None else []) + [ca.repmat(p, 1, count)]
         Y = ca.MX.sym(f"Y{len(self.node_blocks)}", node.size1_out(0), count)
