@@ -30,10 +30,11 @@ from functools import lru_cache
 from pathlib import Path
 
 import casadi as ca
+import numpy as np
 
 from .cache import FLAGS, compiler, load
 
-__all__ = ["NodeKernels", "node_function", "node_kernels", "flow_jacobian"]
+__all__ = ["NodeKernels", "node_function", "defect_function", "node_kernels", "flow_jacobian"]
 
 
 def node_function(
@@ -63,6 +64,19 @@ def node_function(
     if not isinstance(y, ca.SX):
         raise TypeError("the node function is not an SX expression")
     return ca.Function("node", [ca.vertcat(x, u, a, p)], [y], ["z"], ["y"])
+
+
+def defect_function(n: int, nq: int, C: np.ndarray) -> ca.Function:
+    """``defects(z) -> y``: the collocation defects of one mesh interval of a mechanical model
+    in implicit form, ``y = vec(X C − h [q̇; a])`` with ``z = [vec(X); vec(A); h]``: ``X`` the
+    ``n × (d + 1)`` states at the interval's start and Radau points (``x = (q, q̇)``, ``nq``
+    coordinates), ``A`` the ``nq × d`` accelerations at the points, ``C`` the
+    ``(d + 1) × d`` differentiation matrix, ``h`` the interval's length (s)."""
+    d = C.shape[1]
+    X, A, h = ca.SX.sym("X", n, d + 1), ca.SX.sym("A", nq, d), ca.SX.sym("h")
+    F = ca.vertcat(X[nq:, 1:], A)
+    y = ca.vec(ca.mtimes(X, ca.DM(C)) - h * F)
+    return ca.Function("node", [ca.vertcat(ca.vec(X), ca.vec(A), h)], [y], ["z"], ["y"])
 
 
 class NodeKernels:

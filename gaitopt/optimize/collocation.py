@@ -57,7 +57,7 @@ import numpy as np
 
 from ..errors import GaitoptInputError
 from ..hybrid import rate_along
-from ..kernels.nodes import flow_jacobian, node_function, node_kernels
+from ..kernels.nodes import defect_function, flow_jacobian, node_function, node_kernels
 from .nodes import NodeBlock, substitute
 from .problem import GaitProblem
 from .radau import (
@@ -297,11 +297,17 @@ class Collocation:
                     balance = Yk[:nq, :]
                 add(f"equations of motion ({label})", balance)
                 F = ca.vertcat(Xc[nq:, :], Ak)
-            defects = []
-            for j in range(N):
-                Xi = Xk[:, j * d : j * d + d + 1]
-                defects.append(ca.mtimes(Xi, ca.DM(self.C)) - hs[j] * F[:, j * d : (j + 1) * d])
-            add(f"dynamics ({label})", ca.horzcat(*defects))
+            if Yk is not None and self.implicit is not None:
+                # Every defect is a function of its interval's own variables: one more block
+                # of kernels (the interval's defects, compiled), not differentiated per mesh.
+                add(f"dynamics ({label})", self._defect_block(Xk, Ak, hs))
+            else:
+                defects = []
+                for j in range(N):
+                    Xi = Xk[:, j * d : j * d + d + 1]
+                    F_j = F[:, j * d : (j + 1) * d]
+                    defects.append(ca.mtimes(Xi, ca.DM(self.C)) - hs[j] * F_j)
+                add(f"dynamics ({label})", ca.horzcat(*defects))
             x_end, u_end = Xk[:, -1], Uk[:, -1]
             add(f"guard '{tr.name}' at the end of {label}", tr.guard(x_end, u_end, p))
             if tr.admissible is None and Xc.shape[1] > 1:
@@ -545,6 +551,26 @@ class Collocation:
         parts = [Xc, Uk] + ([Ak] if Ak is not None else []) + [ca.repmat(p, 1, count)]
         Y = ca.MX.sym(f"Y{len(self.node_blocks)}", node.size1_out(0), count)
         self.node_blocks.append(NodeBlock(kernels, node, Y, ca.vertcat(*parts)))
+        return Y
+
+    def _defect_block(self, Xk: Any, Ak: Any, hs: list[Any]) -> ca.MX:
+        """The collocation defects ``X_j C − h_j (q̇, a)`` of an implicit phase's intervals as
+        the outputs ``Y`` (n·d × N) of a block of :mod:`gaitopt.optimize.nodes` whose inputs
+        are each interval's states, accelerations and length (the interval kernel
+        :func:`gaitopt.kernels.nodes.defect_function`)."""
+        N, d = self.N, self.d
+        n = Xk.shape[0]
+        nq = n // 2
+        fn = defect_function(n, nq, self.C)
+        kernels = node_kernels(fn, f"defects_{n}_{d}")
+        cols = [
+            ca.vertcat(
+                ca.vec(Xk[:, j * d : j * d + d + 1]), ca.vec(Ak[:, j * d : (j + 1) * d]), hs[j]
+            )
+            for j in range(N)
+        ]
+        Y = ca.MX.sym(f"Y{len(self.node_blocks)}", n * d, N)
+        self.node_blocks.append(NodeBlock(kernels, fn, Y, ca.horzcat(*cols)))
         return Y
 
     def _bound_arcs(self, k: int, Xk: Any, Uk: Any, p: Any, label: str, add: Any) -> None:

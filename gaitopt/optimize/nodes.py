@@ -177,8 +177,6 @@ def split_solver(
     # the interpreted node function (differentiated in MX: the nodes' reverse mode is one
     # small SX function, mapped), which also gives IPOPT f and g.
     f_i, g_i = substitute(blocks, [f, g])
-    reference = ca.Function("nlp_reference", [w, p], [f_i, g_i])
-    f_r, g_r = reference(wm, pm)
     opts = dict(options)
     opts.update(
         expand=False,
@@ -186,4 +184,4 @@ def split_solver(
         jac_g=jac_g,
         hess_lag=hess_lag,
     )
-    return ca.nlpsol(name, "ipopt", {"x": wm, "p": pm, "f": f_r, "g": g_r}, opts)
+    return ca.nlpsol(name, "ipopt", {"x": w, "p": p, "f": f_i, "g": g_i}, opts)
