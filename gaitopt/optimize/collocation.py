@@ -129,13 +129,18 @@ def phase_node_kernels(
     return node, node_kernels(node, label)
 
 
-def warm_kernels(model: Any) -> bool:
-    """Compile (or find in the cache) the node kernels a transcription of ``model`` uses and
-    the flow Jacobians of its Floquet check (``python -m gaitopt.kernels --warm``); whether
-    every one is compiled."""
+def warm_kernels(model: Any, degree: int = 6) -> bool:
+    """Compile (or find in the cache) the node kernels a transcription of ``model`` of Radau
+    ``degree`` (default: the default mesh's) uses and the flow Jacobians of its Floquet check
+    (``python -m gaitopt.kernels --warm``); whether every one is compiled."""
     phases = model.phases
     implicit = _implicit_dynamics(model) if len(phases) == 1 else None
     compiled = True
+    if implicit is not None:  # the interval defects on the default mesh's degree
+        n = phases[0].n
+        tau = np.array([0.0, *ca.collocation_points(degree, "radau")])
+        C = _derivative_matrix(tau, tau[1:]).T  # as Collocation.C
+        compiled = node_kernels(defect_function(n, n // 2, C), f"defects_{n}_{degree}").compiled
     for i, phase in enumerate(phases):
         found = phase_node_kernels(model, i, implicit)
         compiled = compiled and found is not None and found[1].compiled
