@@ -89,6 +89,13 @@ def test_five_link_arcs(monkeypatch):
     _compare(problem, RadauMesh(2, 3), arcs, monkeypatch=monkeypatch)
 
 
+def test_compass_gait_free_parameter(monkeypatch):
+    # A free parameter (the leg's a): the node kernels are differentiated in p too.
+    model = gaitopt.model("compass_gait", slope=0)
+    problem = as_problem(model, cost="effort", period=0.8, step_length=0.3, free=("a",))
+    _compare(problem, RadauMesh(3, 4), monkeypatch=monkeypatch)
+
+
 def test_kneed_walker_two_phases(monkeypatch):
     model = gaitopt.model("kneed_walker")
     problem = as_problem(model, cost="effort", period=0.5643, step_length=0.47)
@@ -101,7 +108,7 @@ def test_interpreted_kernels_match_compiled(monkeypatch):
     model = gaitopt.model("compass_gait", slope=0)
     node, compiled = phase_node_kernels(model, 0, None)
     monkeypatch.setenv("GAITOPT_COMPILE", "0")
-    interpreted = NodeKernels(node, "compassgait_0e")
+    interpreted = NodeKernels(node, "compassgait_0e", compiled.nd)
     assert not interpreted.compiled
     rng = np.random.default_rng(2)
     z = np.concatenate([rng.normal(scale=0.3, size=node.size1_in(0) - model.p.size), model.p])

@@ -114,11 +114,11 @@ def _implicit_dynamics(model: Any) -> ca.Function | None:
 
 
 def phase_node_kernels(
-    model: Any, i: int, implicit: ca.Function | None
+    model: Any, i: int, implicit: ca.Function | None, free: bool = False
 ) -> tuple[ca.Function, Any] | None:
     """The node function of model phase ``i`` (with the implicit dynamics ``implicit``, if any)
-    and its compiled kernels (:mod:`gaitopt.kernels.nodes`); None where the model's functions
-    have no SX form."""
+    and its compiled kernels (:mod:`gaitopt.kernels.nodes`), differentiated in the parameters
+    too where some are ``free``; None where the model's functions have no SX form."""
     phase = model.phases[i]
     constraints = tuple(c.function for c in getattr(phase, "constraints", ()))
     try:
@@ -126,7 +126,8 @@ def phase_node_kernels(
     except (TypeError, RuntimeError, NotImplementedError):
         return None
     label = f"{type(model).__name__.lower()}_{i}{'i' if implicit is not None else 'e'}"
-    return node, node_kernels(node, label)
+    nd = None if free else node.size1_in(0) - len(model.p)
+    return node, node_kernels(node, label, nd)
 
 
 def warm_kernels(model: Any, degree: int = 6) -> bool:
@@ -548,7 +549,7 @@ class Collocation:
         where the node function cannot be built in SX or :attr:`use_node_kernels` is off."""
         if not self.use_node_kernels:
             return None
-        found = phase_node_kernels(self.model, i, self.implicit)
+        found = phase_node_kernels(self.model, i, self.implicit, bool(self.problem.free))
         if found is None:
             return None
         node, kernels = found

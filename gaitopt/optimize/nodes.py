@@ -101,12 +101,22 @@ def split_solver(
     o_jac = ca.Function("o_jac", args, [gs, ca.jacobian(gs, ws), ca.jacobian(gs, Yflat)])
     o_grad = ca.Function("o_grad", args, [fs, ca.gradient(fs, ws), ca.gradient(fs, Yflat)])
     o_hess = ca.Function("o_hess", [*args, sigma, lam], [mu, H_ww, H_wY, H_YY])
-    # The node inputs Z(w, p): a selection of w (and p), in general any function.
+    # The node inputs Z(w, p): a selection of w (and p), in general any function; the kernels
+    # are differentiated in the first nd rows of each node's inputs (the rest: constants).
     Zs = ca.Function("Z", [w, p], [ca.vertcat(*[ca.vec(b.Z) for b in blocks])]).expand()
     Zflat = Zs(ws, ps)
-    nu = ca.SX.sym("nu", Zflat.shape[0])
-    Z_w = ca.jacobian(Zflat, ws)
-    HZ = ca.hessian(ca.dot(nu, Zflat), ws)[0]
+    rows, at = [], 0
+    for b in blocks:
+        nz, nd = b.kernels.nz, b.kernels.nd
+        rows += [at + c * nz + r for c in range(b.count) for r in range(nd)]
+        constant = [at + c * nz + r for c in range(b.count) for r in range(nd, nz)]
+        if constant and ca.jacobian(Zflat[constant], ws).nnz():
+            raise ValueError("node inputs past nd depend on the decision variables")
+        at += nz * b.count
+    Zd = Zflat[rows]
+    nu = ca.SX.sym("nu", Zd.shape[0])
+    Z_w = ca.jacobian(Zd, ws)
+    HZ = ca.hessian(ca.dot(nu, Zd), ws)[0]
     z_fun = ca.Function("z", [ws, ps], [Zflat, Z_w])
     z_hess = ca.Function("z_hess", [ws, ps, nu], [HZ]) if HZ.nnz() else None
 
@@ -128,7 +138,7 @@ def split_solver(
     for b, z in zip(blocks, Zk, strict=True):
         y, J = b.kernels.jac.map(b.count)(z)
         Y_vals.append(ca.vec(y))
-        Y_w.append(_block_diagonal(J, b.kernels.nz, b.count))
+        Y_w.append(_block_diagonal(J, b.kernels.nd, b.count))
     Ym = ca.vertcat(*Y_vals)
     Y_wm = ca.mtimes(ca.diagcat(*Y_w), Z_wm)  # ∂Y/∂w
 
@@ -161,7 +171,7 @@ def split_solver(
         at += size
         nu_k, Hb = b.kernels.hess.map(b.count)(z, mu_k)
         nus.append(ca.vec(nu_k))
-        H_nodes.append(_block_diagonal(Hb, b.kernels.nz, b.count))
+        H_nodes.append(_block_diagonal(Hb, b.kernels.nd, b.count))
     Hm = Hm + ca.mtimes(Z_wm.T, ca.mtimes(ca.diagcat(*H_nodes), Z_wm))
     if z_hess is not None:
         Hm = Hm + z_hess(wm, pm, ca.vertcat(*nus))
