@@ -95,7 +95,9 @@ def _model(name: str, repeats: int) -> dict[str, Any]:
     calls = [json.loads(o.strip().splitlines()[-1]) for o in inside if o.startswith("{")]
     first = _median([c["first_call_s"] for c in calls])
     whole = _median(process_times)
-    measured = whole if name == "five_link_biped" else first
+    five = name == "five_link_biped"
+    measured = whole if five else first
+    cpu = _median(process_cpu) if five else _median([c["first_call_cpu_s"] for c in calls])
     goal = GOALS[name]
     return {
         "command": "gaitopt optimize " + " ".join(_ARGS[name]) + " --json",
@@ -108,11 +110,13 @@ def _model(name: str, repeats: int) -> dict[str, Any]:
         "cost": cost,
         "success": success,
         "goal": {
-            "measure": "process_s" if name == "five_link_biped" else "first_call_s",
+            "measure": "process_s" if five else "first_call_s",
             "goal_s": goal,
             "measured_s": measured,
             "ratio": measured / goal,
             "met": bool(measured <= goal),
+            "measured_cpu_s": cpu,
+            "ratio_cpu": cpu / goal,
         },
     }
 
