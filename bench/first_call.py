@@ -32,7 +32,7 @@ from typing import Any
 
 from .common import _machine, _median
 
-__all__ = ["run", "GOALS"]
+__all__ = ["run", "table", "GOALS"]
 
 #: Goals (s): the five-link biped's whole process, the compass gait's first call.
 GOALS = {"five_link_biped": 3.0, "compass_gait": 0.5}
@@ -126,6 +126,21 @@ def run(repeats: int = 3) -> dict[str, Any]:
     return {name: _model(name, repeats) for name in GOALS}
 
 
+def table(first_call: dict[str, Any]) -> str:
+    """The goals as printed lines: measured (wall and CPU), goal, ratio."""
+    if "skipped" in first_call:
+        return f"first call: {first_call}"
+    lines = ["The optimiser's first call in a fresh process (wall; CPU):"]
+    for name, entry in first_call.items():
+        g = entry["goal"]
+        lines.append(
+            f"  {name:16s} {g['measure']} {g['measured_s']:.2f} s; {g['measured_cpu_s']:.2f} s "
+            f"(goal {g['goal_s']} s: ratio {g['ratio']:.2f}; {g['ratio_cpu']:.2f}), "
+            f"cost {entry['cost']}, success {entry['success']}"
+        )
+    return "\n".join(lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m bench.first_call", description=__doc__)
     parser.add_argument("--repeats", type=int, default=3, help="processes per measure")
@@ -134,12 +149,7 @@ def main(argv: list[str] | None = None) -> int:
     record = {"machine": _machine(), "repeats": args.repeats, "first_call": run(args.repeats)}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(record, indent=2) + "\n")
-    for name, entry in record["first_call"].items():
-        g = entry["goal"]
-        print(f"{name:16s} process {entry['process_s']:6.2f} s (CPU {entry['process_cpu_s']:.2f})"
-              f"  first call {entry['first_call_s']:6.2f} s (CPU {entry['first_call_cpu_s']:.2f})"
-              f"  goal {g['measure']} <= {g['goal_s']} s: ratio {g['ratio']:.2f}"
-              f"  cost {entry['cost']}")  # fmt: skip
+    print(table(record["first_call"]))
     print(f"Wrote {args.out}")
     return 0
 
