@@ -10,7 +10,8 @@ $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
-	$(BIN)/python -m gaitopt.kernels --warm  # compile the built-in models' shooting kernels once
+	$(BIN)/python -m compileall -q gaitopt  # bytecode now: no process compiles the sources again
+	$(BIN)/python -m gaitopt.kernels --warm  # compile the built-in models' kernels once
 	touch $(STAMP)
 
 install: $(STAMP)

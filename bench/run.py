@@ -63,6 +63,7 @@ from gaitopt.files import write_json
 
 from . import branches as _bench_branches
 from . import curves as _bench_curves
+from . import first_call as _bench_first_call
 from . import optimize as _bench_optimize
 from . import speed as _bench_speed
 from .common import _machine
@@ -147,6 +148,11 @@ def run(
             record["speed"] = _bench_speed.run(repeats=repeats, drake=drake is not None)
         except Exception as err:  # report, never sink the benchmark
             record["speed"] = {"skipped": f"{type(err).__name__}: {err}"}
+        log("[bench] the optimiser's first call in fresh processes (five-link, compass gait)")
+        try:
+            record["first_call"] = _bench_first_call.run(repeats=repeats)
+        except Exception as err:  # report, never sink the benchmark
+            record["first_call"] = {"skipped": f"{type(err).__name__}: {err}"}
     if control:
         log(f"[bench] slip deadbeat decision: Python, generated C, simulation ({decisions}×)")
         try:

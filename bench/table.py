@@ -7,6 +7,7 @@ from typing import Any
 
 from . import branches as _bench_branches
 from . import curves as _bench_curves
+from . import first_call as _bench_first_call
 from . import optimize as _bench_optimize
 from . import speed as _bench_speed
 from .common import _median, _ms, _sci
@@ -185,6 +186,8 @@ def format_table(record: dict[str, Any]) -> str:
         lines += ["", _bench_optimize.table(o) if "skipped" not in o else f"optimize: {o}"]
     if "speed" in record and "skipped" in record["speed"]:
         lines += ["", f"speed: {record['speed']}"]
+    if "first_call" in record:
+        lines += ["", _bench_first_call.table(record["first_call"])]
     lines += ["", _bench_speed.table(record)]
     lines.append(f"Total benchmark time: {record['elapsed_s']:.0f} s.")
     return "\n".join(lines)

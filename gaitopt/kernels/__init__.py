@@ -5,7 +5,10 @@
 * :mod:`~gaitopt.kernels.cache` — generated C compiled once per model class, kept in a user cache
   directory, loaded with ``ca.external`` (interpreted where there is no C compiler);
 * :mod:`~gaitopt.kernels.assemble` — the shooting residual and its Jacobians assembled in NumPy
-  from per-segment blocks, for any mesh and period.
+  from per-segment blocks, for any mesh and period;
+* :mod:`~gaitopt.kernels.nodes` — the collocation's node and interval functions with their
+  Jacobians and Hessians, and the flow Jacobians of the Floquet check (the optimiser's kernels,
+  assembled by :mod:`gaitopt.optimize.nodes`).
 
 ``python -m gaitopt.kernels --warm`` compiles the kernels of every built-in model (``make
 install`` runs it), so that no later call waits for the compiler.

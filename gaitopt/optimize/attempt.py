@@ -15,6 +15,7 @@ import numpy as np
 from .active import _violation
 from .collocation import Arc, Collocation, RadauMesh
 from .guess import NoStart, _start_guess
+from .nodes import split_solver
 from .problem import GaitProblem
 from .result import OptimalGait
 
@@ -88,7 +89,11 @@ def _solver(col: Collocation) -> ca.Function:
     key = (_statement_key(col.problem, values=False), col.mesh, repr(col.structure))
     solver = _SOLVERS.pop(key, None)
     if solver is None:
-        solver = ca.nlpsol("gait", "ipopt", col.nlp, _IPOPT)
+        if col.node_blocks:  # exact derivatives assembled from the compiled node kernels
+            f, g = col.outer
+            solver = split_solver("gait", col._w, col._p, f, g, col.node_blocks, _IPOPT)
+        else:
+            solver = ca.nlpsol("gait", "ipopt", col.nlp, _IPOPT)
     _SOLVERS[key] = solver  # most recently used last
     while len(_SOLVERS) > _CACHED_TRANSCRIPTIONS:
         _SOLVERS.pop(next(iter(_SOLVERS)))

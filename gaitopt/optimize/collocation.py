@@ -59,7 +59,9 @@ import numpy as np
 
 from ..errors import GaitoptInputError
 from ..hybrid import rate_along
+from ..kernels.nodes import defect_function, flow_jacobian, node_function, node_kernels
 from ..orbit.certificate import CONSTRAINT_TOL
+from .nodes import NodeBlock, substitute
 from .problem import GaitProblem
 from .radau import (
     COAST,
@@ -75,7 +77,7 @@ from .radau import (
 )
 from .state_arcs import touch_rows
 
-__all__ = ["RadauMesh", "Collocation", "lagrange_matrix", "Group", "Arc"]
+__all__ = ["RadauMesh", "Collocation", "lagrange_matrix", "Group", "Arc", "warm_kernels"]
 
 #: Uniform samples per mesh interval of the dense check of state bounds and limits
 #: (:meth:`Collocation.check_limits`): not the nodes, where they are imposed.
@@ -116,8 +118,52 @@ def _implicit_dynamics(model: Any) -> ca.Function | None:
     return f
 
 
+def phase_node_kernels(
+    model: Any, i: int, implicit: ca.Function | None, free: bool = False
+) -> tuple[ca.Function, Any] | None:
+    """The node function of model phase ``i`` (with the implicit dynamics ``implicit``, if any)
+    and its compiled kernels (:mod:`gaitopt.kernels.nodes`), differentiated in the parameters
+    too where some are ``free``; None where the model's functions have no SX form."""
+    phase = model.phases[i]
+    constraints = tuple(c.function for c in getattr(phase, "constraints", ()))
+    try:
+        node = node_function(phase.flow, constraints, implicit)
+    except (TypeError, RuntimeError, NotImplementedError):
+        return None
+    label = f"{type(model).__name__.lower()}_{i}{'i' if implicit is not None else 'e'}"
+    nd = None if free else node.size1_in(0) - len(model.p)
+    return node, node_kernels(node, label, nd)
+
+
+def warm_kernels(model: Any, degree: int = 6) -> bool:
+    """Compile (or find in the cache) the node kernels a transcription of ``model`` of Radau
+    ``degree`` (default: the default mesh's) uses and the flow Jacobians of its Floquet check
+    (``python -m gaitopt.kernels --warm``); whether every one is compiled."""
+    phases = model.phases
+    implicit = _implicit_dynamics(model) if len(phases) == 1 else None
+    compiled = True
+    if implicit is not None:  # the interval defects on the default mesh's degree
+        n = phases[0].n
+        tau = np.array([0.0, *ca.collocation_points(degree, "radau")])
+        C = _derivative_matrix(tau, tau[1:]).T  # as Collocation.C
+        compiled = node_kernels(defect_function(n, n // 2, C), f"defects_{n}_{degree}").compiled
+    for i, phase in enumerate(phases):
+        found = phase_node_kernels(model, i, implicit)
+        compiled = compiled and found is not None and found[1].compiled
+        try:
+            flow_jacobian(phase.flow, f"{type(model).__name__.lower()}_{i}")
+        except (TypeError, RuntimeError, NotImplementedError):
+            compiled = False
+    return compiled
+
+
 class Collocation:
     """The nonlinear program of a :class:`GaitProblem` on a :class:`RadauMesh`.
+
+    The equations repeated at every collocation node (the dynamics, the phase's unilateral
+    constraints) are the node function of :mod:`gaitopt.kernels.nodes`: ``node_blocks`` say where
+    (:mod:`gaitopt.optimize.nodes`), ``outer`` is ``(f, g)`` with their outputs as symbols, and
+    the solver assembles the exact derivatives from the compiled node kernels.
 
     Attributes
     ----------
@@ -129,6 +175,10 @@ class Collocation:
     groups : list of Group
         The constraint blocks, named for messages and the active set.
     """
+
+    #: Transcribe the nodes with the node kernels (False: the whole NLP is one CasADi graph,
+    #: differentiated by CasADi; the same NLP, for comparisons).
+    use_node_kernels = True
 
     def __init__(
         self, problem: GaitProblem, mesh: RadauMesh, structure: list[list[Arc]] | None = None
@@ -158,6 +208,7 @@ class Collocation:
         self.section_index = [states0.index(c) for c in section.coordinates]
 
         self.implicit = _implicit_dynamics(model) if len(phases) == 1 else None
+        self.node_blocks: list[NodeBlock] = []
         B = _Blocks()
         self.blocks = B
         lo0, hi0 = problem.state_bounds_of(0)
@@ -243,21 +294,33 @@ class Collocation:
                     continue
                 name = model.inputs[r]
                 add(f"impulse '{name}' held over {label}", Uk[r, :-1] - Uk[r, -1])
+            Ak = B.syms[B.names.index(f"A{k}")] if self.implicit is not None else None
+            Yk = self._node_block(i, Xc, Uk, Ak, p)
             if self.implicit is None:
-                F = phase.flow.map(N * d)(Xc, Uk, p)
+                F = phase.flow.map(N * d)(Xc, Uk, p) if Yk is None else Yk[: phase.n, :]
             else:  # ẋ = (q̇, a) with M(q) a = rhs(q, q̇, u) as constraints
                 nq = phase.n // 2
-                Ak = B.syms[B.names.index(f"A{k}")]
-                M, rhs = self.implicit.map(N * d)(Xc[:nq, :], Xc[nq:, :], Uk, p)
-                Ms = ca.horzsplit(M, nq)
-                balance = [ca.mtimes(Ms[c], Ak[:, c]) - rhs[:, c] for c in range(N * d)]
-                add(f"equations of motion ({label})", ca.horzcat(*balance))
+                if Yk is None:
+                    M, rhs = self.implicit.map(N * d)(Xc[:nq, :], Xc[nq:, :], Uk, p)
+                    Ms = ca.horzsplit(M, nq)
+                    balance = ca.horzcat(
+                        *[ca.mtimes(Ms[c], Ak[:, c]) - rhs[:, c] for c in range(N * d)]
+                    )
+                else:
+                    balance = Yk[:nq, :]
+                add(f"equations of motion ({label})", balance)
                 F = ca.vertcat(Xc[nq:, :], Ak)
-            defects = []
-            for j in range(N):
-                Xi = Xk[:, j * d : j * d + d + 1]
-                defects.append(ca.mtimes(Xi, ca.DM(self.C)) - hs[j] * F[:, j * d : (j + 1) * d])
-            add(f"dynamics ({label})", ca.horzcat(*defects))
+            if Yk is not None and self.implicit is not None:
+                # Every defect is a function of its interval's own variables: one more block
+                # of kernels (the interval's defects, compiled), not differentiated per mesh.
+                add(f"dynamics ({label})", self._defect_block(Xk, Ak, hs))
+            else:
+                defects = []
+                for j in range(N):
+                    Xi = Xk[:, j * d : j * d + d + 1]
+                    F_j = F[:, j * d : (j + 1) * d]
+                    defects.append(ca.mtimes(Xi, ca.DM(self.C)) - hs[j] * F_j)
+                add(f"dynamics ({label})", ca.horzcat(*defects))
             x_end, u_end = Xk[:, -1], Uk[:, -1]
             add(f"guard '{tr.name}' at the end of {label}", tr.guard(x_end, u_end, p))
             if tr.admissible is None and Xc.shape[1] > 1:
@@ -283,13 +346,17 @@ class Collocation:
                 )
             u_start = ca.mtimes(Uk[:, :d], ca.DM(self.u_at_start))
             margin, margin0 = self._clearance_margin(T, hs, k)
-            for c in phase.constraints:
+            first_row = phase.n // 2 if self.implicit is not None else phase.n
+            for r, c in enumerate(phase.constraints):
                 nodes = Xk[:, 1:-1] if c.at_end else Xk[:, 1:]
                 unodes = Uk[:, :-1] if c.at_end else Uk
                 # A length (a foot's height) keeps the problem's clearance margin.
                 lift = margin if c.unit == "m" else ca.MX.zeros(1, N * d)
                 if nodes.shape[1]:
-                    values = c.function.map(nodes.shape[1])(nodes, unodes, p)
+                    if Yk is None:
+                        values = c.function.map(nodes.shape[1])(nodes, unodes, p)
+                    else:  # the node kernel's row of this constraint
+                        values = Yk[first_row + r, : nodes.shape[1]]
                     values = values - (lift[:, :-1] if c.at_end else lift)
                     add(f"'{c.name}' ({label})", values, 0.0, np.inf)
                 if c.at_start:
@@ -466,7 +533,16 @@ class Collocation:
         braking = ca.sum1(ca.vertcat(*brake_terms)) if brake_terms else ca.MX(0)
         if brake_terms:  # the singular braking arcs' least-effort torque; reported apart
             objective = J + problem.braking_effort * braking
-        self.nlp = {"x": w, "p": p_in, "f": objective, "g": ca.vertcat(*g)}
+        g_all = ca.vertcat(*g)
+        positive_work = ca.sum1(ca.vertcat(*work_terms)) if work else ca.MX(np.nan)
+        # The node outputs Y stand for the node function at the nodes (gaitopt.optimize.nodes):
+        # the solver assembles its derivatives from compiled kernels; everyone else sees the
+        # ordinary graph.
+        self.outer = (objective, g_all)
+        objective, g_all, J, positive_work, braking = substitute(
+            self.node_blocks, [objective, g_all, J, positive_work, braking]
+        )
+        self.nlp = {"x": w, "p": p_in, "f": objective, "g": g_all}
         self.lbx = np.concatenate(B.lb)
         self.ubx = np.concatenate(B.ub)
         self.lbg = np.concatenate(lbg)
@@ -476,11 +552,48 @@ class Collocation:
             "period": period,
             "distance": total,
             "p_used": p,
-            "positive_work": ca.sum1(ca.vertcat(*work_terms)) if work else ca.MX(np.nan),
+            "positive_work": positive_work,
             "braking_effort": braking,
         }
         self._X, self._U, self._T = X, U, T
         self._theta = Th
+
+    def _node_block(self, i: int, Xc: Any, Uk: Any, Ak: Any, p: Any) -> ca.MX | None:
+        """The node outputs ``Y`` (dynamics rows, then one row per unilateral constraint) of a
+        phase of model phase ``i`` at its ``N·d`` collocation points (``Xc``, ``Uk``, ``Ak``:
+        their states, inputs, accelerations), a block of :mod:`gaitopt.optimize.nodes`; None
+        where the node function cannot be built in SX or :attr:`use_node_kernels` is off."""
+        if not self.use_node_kernels:
+            return None
+        found = phase_node_kernels(self.model, i, self.implicit, bool(self.problem.free))
+        if found is None:
+            return None
+        node, kernels = found
+        count = Xc.shape[1]
+        parts = [Xc, Uk] + ([Ak] if Ak is not None else []) + [ca.repmat(p, 1, count)]
+        Y = ca.MX.sym(f"Y{len(self.node_blocks)}", node.size1_out(0), count)
+        self.node_blocks.append(NodeBlock(kernels, node, Y, ca.vertcat(*parts)))
+        return Y
+
+    def _defect_block(self, Xk: Any, Ak: Any, hs: list[Any]) -> ca.MX:
+        """The collocation defects ``X_j C − h_j (q̇, a)`` of an implicit phase's intervals as
+        the outputs ``Y`` (n·d × N) of a block of :mod:`gaitopt.optimize.nodes` whose inputs
+        are each interval's states, accelerations and length (the interval kernel
+        :func:`gaitopt.kernels.nodes.defect_function`)."""
+        N, d = self.N, self.d
+        n = Xk.shape[0]
+        nq = n // 2
+        fn = defect_function(n, nq, self.C)
+        kernels = node_kernels(fn, f"defects_{n}_{d}")
+        cols = [
+            ca.vertcat(
+                ca.vec(Xk[:, j * d : j * d + d + 1]), ca.vec(Ak[:, j * d : (j + 1) * d]), hs[j]
+            )
+            for j in range(N)
+        ]
+        Y = ca.MX.sym(f"Y{len(self.node_blocks)}", n * d, N)
+        self.node_blocks.append(NodeBlock(kernels, fn, Y, ca.horzcat(*cols)))
+        return Y
 
     def _bound_arcs(self, k: int, Xk: Any, Uk: Any, p: Any, label: str, add: Any) -> None:
         """The arcs of active input bounds for a cost without powers (least effort): on an

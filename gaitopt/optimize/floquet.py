@@ -20,6 +20,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from ..kernels.nodes import flow_jacobian
 from .collocation import Collocation, _derivative_matrix
 
 __all__ = ["return_map_jacobian"]
@@ -52,6 +53,49 @@ def _phase_residual(flow: ca.Function, N: int, d: int, C_key: bytes) -> ca.Funct
         [Xf, x0, dt0, U, Ud, H, p],
         [ca.jacobian(R, ca.vec(Xf)), ca.jacobian(R, z)],
     )
+
+
+def _sensitivity(
+    col: Collocation,
+    k: int,
+    flow: ca.Function,
+    X: np.ndarray,
+    U: np.ndarray,
+    Ud: np.ndarray,
+    hs: np.ndarray,
+    p: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``R_X``, ``R_z`` of :func:`_phase_residual` at ``δt₀ = 0``, assembled in NumPy from the
+    flow's Jacobians at the nodes (a compiled kernel, :func:`gaitopt.kernels.nodes.flow_jacobian`,
+    mapped over the nodes): the defect of interval ``j`` at its point ``c`` is
+    ``Σ_r C[r, c] X_{jd+r} − h_j f(X_{jd+c+1}, U_{jd+c} + U̇_{jd+c} δt₀)``.  Where the flow has no
+    SX form, the symbolic :func:`_phase_residual` (same numbers)."""
+    N, d, C = col.N, col.d, col.C
+    n, n_u = X.shape[0], U.shape[0]
+    try:
+        kern = flow_jacobian(flow, f"{type(col.model).__name__.lower()}_{col.chain[k]}")
+    except (TypeError, RuntimeError, NotImplementedError):
+        sens = _phase_residual(flow, N, d, C.tobytes())
+        return tuple(np.asarray(v, dtype=float) for v in sens(X[:, 1:], X[:, 0], 0.0, U, Ud, hs, p))
+    _, F_x, F_u = (np.asarray(v, dtype=float) for v in kern.map(N * d)(X[:, 1:], U, p))
+    R_X = np.zeros((n * N * d, n * N * d))
+    R_z = np.zeros((n * N * d, n + 1))
+    eye = np.eye(n)
+    for j in range(N):
+        for c in range(d):
+            node = j * d + c
+            rows = slice(n * node, n * node + n)
+            for r in range(d + 1):
+                col_x = j * d + r  # column of X (0: the phase's start x0)
+                block = C[r, c] * eye
+                if r == c + 1:
+                    block = block - hs[j] * F_x[:, n * node : n * node + n]
+                if col_x == 0:
+                    R_z[rows, :n] += block
+                else:
+                    R_X[rows, n * (col_x - 1) : n * col_x] += block
+            R_z[rows, n] = -hs[j] * F_u[:, n_u * node : n_u * node + n_u] @ Ud[:, node]
+    return R_X, R_z
 
 
 @lru_cache(maxsize=64)
@@ -91,8 +135,7 @@ def return_map_jacobian(col: Collocation, w: np.ndarray, p_model: np.ndarray) ->
         X, U, T = sol["X"][k], sol["U"][k], float(sol["T"][k])
         hs = T * np.diff(sol["breaks"][k])
         Ud = np.hstack([U[:, j * d : (j + 1) * d] @ D.T / hs[j] for j in range(N)])
-        sens = _phase_residual(phase.flow, N, d, col.C.tobytes())
-        R_X, R_z = (np.asarray(v, dtype=float) for v in sens(X[:, 1:], X[:, 0], 0.0, U, Ud, hs, p))
+        R_X, R_z = _sensitivity(col, k, phase.flow, X, U, Ud, hs, p)
         dX = -np.linalg.solve(R_X, R_z)  # ∂vec(Xfree)/∂[x0; dt0]
         n = phase.n
         Phi = dX[-n:, :]  # the end state: last column of Xfree
