@@ -441,6 +441,41 @@ def _classify(setup: Mapping[str, Any], model: Any, start: np.ndarray) -> str:
     return "converged" if arrival < setup["steps"] else "not converged"
 
 
+#: Starts per call of the batch simulation (bounds its memory: about 2 kB per start and step).
+_BLOCK = 4096
+
+
+def _classify_many(setup: Mapping[str, Any], model: Any, starts: np.ndarray) -> list[str]:
+    """:func:`_classify` for many starts at once: the same simulations (the algorithm of
+    :func:`gaitopt.simulate`), all starts stepped together by
+    :func:`gaitopt.simulation.batch.simulate_batch`, and the same rule."""
+    from .simulation.batch import simulate_batch
+
+    centre, scale = np.asarray(setup["centre"]), np.asarray(setup["scale"])
+    period, tol, steps = setup["period"], setup["tol"], setup["steps"]
+    index = [model.state_names.index(c) for c in setup["coordinates"]]
+    outcomes: list[str] = []
+    starts = np.atleast_2d(np.asarray(starts, dtype=float))
+    for k in range(0, len(starts), _BLOCK):
+        block = starts[k : k + _BLOCK]
+        sim = simulate_batch(
+            model, block, steps=(steps + setup["hold"]) * period, inputs=setup["inputs"]
+        )
+        returns = sim.section_states[:, period::period][:, :, index]  # starts × periods × s
+        within = np.all(np.abs(returns - centre) <= tol * scale, axis=2)  # NaN compares False
+        outside = ~within
+        last = np.where(
+            outside.any(axis=1), outside.shape[1] - 1 - np.argmax(outside[:, ::-1], axis=1), -1
+        )
+        arrival = last + 1  # index of the first period that stays
+        for status, arrived in zip(sim.status, arrival, strict=True):
+            if status != "completed":
+                outcomes.append(str(status))
+            else:
+                outcomes.append("converged" if arrived < steps else "not converged")
+    return outcomes
+
+
 def _model_of(setup: Mapping[str, Any]) -> Any:
     from .models import model as make_model
 
@@ -452,6 +487,23 @@ def _starts_task(point: Mapping[str, Any]) -> dict[str, Any]:
     setup = point["setup"]
     model = _model_of(setup)
     return {"outcomes": [_classify(setup, model, np.asarray(s)) for s in point["starts"]]}
+
+
+def _starts_batch(points: list[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """:func:`_starts_task` on many points (one setup): every start in one batch simulation."""
+    if not points:
+        return []
+    setup = points[0]["setup"]
+    if any(point["setup"] != setup for point in points):
+        return [_starts_task(point) for point in points]
+    sizes = [len(point["starts"]) for point in points]
+    starts = np.array([s for point in points for s in point["starts"]], dtype=float)
+    outcomes = _classify_many(setup, _model_of(setup), starts) if len(starts) else []
+    bounds = np.cumsum([0, *sizes])
+    return [{"outcomes": outcomes[a:b]} for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+
+_starts_task.batched = _starts_batch  # type: ignore[attr-defined]
 
 
 def _rays_task(point: Mapping[str, Any]) -> dict[str, Any]:
@@ -485,6 +537,60 @@ def _rays_task(point: Mapping[str, Any]) -> dict[str, Any]:
         beyond = [r for r, ok in zip(grid, fates, strict=True) if ok and r > failed[0]]
         rays.append({"radius": low, "first_failure": high, "beyond": beyond, "runs": runs})
     return {"rays": rays}
+
+
+def _rays_batch(points: list[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """:func:`_rays_task` on many points (one setup), the rays in lockstep: every ray's scan in
+    one batch simulation, then each round of bisection (one radius per ray still bracketing)
+    in one batch.  The same radii, the same rule, every start simulated."""
+    if not points:
+        return []
+    setup = points[0]["setup"]
+    keys = ("setup", "coordinates", "scan", "bisections", "max_radius")
+    if any(any(p[k] != points[0][k] for k in keys) for p in points):
+        return [_rays_task(point) for point in points]
+    model = _model_of(setup)
+    centre, scale = np.asarray(setup["centre"]), np.asarray(setup["scale"])
+    index = [setup["coordinates"].index(c) for c in points[0]["coordinates"]]
+    scan, bisections, top = points[0]["scan"], points[0]["bisections"], points[0]["max_radius"]
+    directions = np.array([d for p in points for d in p["directions"]], dtype=float)
+    steps = np.zeros((len(directions), len(centre)))
+    steps[:, index] = directions * scale[index]
+    grid = np.array([top * k / scan for k in range(1, scan + 1)])
+
+    def converges(rows: np.ndarray, radii: np.ndarray) -> np.ndarray:
+        starts = centre + radii[:, None] * steps[rows]
+        return np.array(_classify_many(setup, model, starts)) == "converged"
+
+    n = len(directions)
+    fates = converges(np.repeat(np.arange(n), scan), np.tile(grid, n)).reshape(n, scan)
+    low, high = np.zeros(n), np.full(n, np.nan)
+    for i in range(n):
+        failed = grid[~fates[i]]
+        if failed.size:
+            high[i] = failed[0]
+            below = grid[fates[i] & (grid < failed[0])]
+            low[i] = below.max() if below.size else 0.0
+    open_ = np.flatnonzero(~np.isnan(high))
+    for _ in range(bisections if open_.size else 0):
+        middle = 0.5 * (low[open_] + high[open_])
+        ok = converges(open_, middle)
+        low[open_] = np.where(ok, middle, low[open_])
+        high[open_] = np.where(ok, high[open_], middle)
+    rays = []
+    for i in range(n):
+        if np.isnan(high[i]):
+            rays.append({"radius": top, "first_failure": None, "beyond": [], "runs": scan})
+            continue
+        failed_first = grid[~fates[i]][0]
+        beyond = [float(r) for r, ok in zip(grid, fates[i], strict=True) if ok and r > failed_first]
+        rays.append({"radius": float(low[i]), "first_failure": float(high[i]),
+                     "beyond": beyond, "runs": scan + bisections})  # fmt: skip
+    sizes = np.cumsum([0, *(len(p["directions"]) for p in points)])
+    return [{"rays": rays[a:b]} for a, b in zip(sizes[:-1], sizes[1:], strict=True)]
+
+
+_rays_task.batched = _rays_batch  # type: ignore[attr-defined]
 
 
 def _run(

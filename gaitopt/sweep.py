@@ -165,7 +165,12 @@ MAX_CHUNK = 10_000
 
 
 def run_chunk(task: Task, chunk: Sequence[Mapping[str, Any]]) -> list[Mapping[str, Any]]:
-    """One Dask task: ``task`` on each point of ``chunk``, in order."""
+    """One Dask task: ``task`` on each point of ``chunk``, in order (all at once where the task
+    has a ``batched`` version: ``task.batched(points)``, equal to ``[task(p) for p in
+    points]``, e.g. a batch simulation of every point's starts together)."""
+    batched = getattr(task, "batched", None)
+    if callable(batched):
+        return list(batched(list(chunk)))
     return [task(point) for point in chunk]
 
 
@@ -178,6 +183,9 @@ def _run(task: Task, points, todo, scheduler, workers, chunk):
     if not todo:
         return
     if scheduler == "serial":
+        if callable(getattr(task, "batched", None)):  # every point in one batch
+            yield list(zip(todo, run_chunk(task, [points[i] for i in todo]), strict=True))
+            return
         for i in todo:
             yield [(i, task(points[i]))]
         return
