@@ -214,4 +214,3 @@ def simulate_batch(
         elapsed=time.perf_counter() - started,
         settings={"steps": steps, "rtol": rtol, "atol": atol, "max_phase_time": max_phase_time},
     )
-

@@ -305,7 +305,8 @@ class BatchPhases:
         factor = np.where(error == 0, _MAX_FACTOR, np.where(grow < _MAX_FACTOR, grow, _MAX_FACTOR))
         factor = np.where(self.rejected[idx] & ~(factor < 1), 1.0, factor)
         shrink = np.where(grow > _MIN_FACTOR, grow, _MIN_FACTOR)
-        self.h_abs[idx] = np.where(accept, h_abs * factor, h_abs * shrink)
+        with np.errstate(all="ignore"):  # a failed start's step may be NaN: it has ended
+            self.h_abs[idx] = np.where(accept, h_abs * factor, h_abs * shrink)
         self.rejected[idx] = ~accept
         self.new_step[idx] = accept
         if not accept.any():
@@ -331,7 +332,9 @@ class BatchPhases:
                             best_t, best_k, best_x)  # fmt: skip
         short = ~np.isnan(self.short[i])
         if short.any():
-            over = np.all(self.armed[i, : ph.n_tr], axis=1) | (t_new - self.t0[i] > 8 * self.short[i])
+            over = np.all(self.armed[i, : ph.n_tr], axis=1) | (
+                t_new - self.t0[i] > 8 * self.short[i]
+            )
             release = short & over
             self.max_step[i[release]], self.short[i[release]] = np.inf, np.nan
         fired = best_k >= 0
@@ -481,8 +484,12 @@ class BatchPhases:
             with np.errstate(all="ignore"):
                 r = d[:, 1:] / d[:, :-1]
                 mean = np.mean(r, axis=1)
-                hit = positive & (mean < 1.0) & np.all(
-                    np.abs(r - mean[:, None]) <= _ZENO_SPREAD * (1.0 - mean[:, None]), axis=1
+                hit = (
+                    positive
+                    & (mean < 1.0)
+                    & np.all(
+                        np.abs(r - mean[:, None]) <= _ZENO_SPREAD * (1.0 - mean[:, None]), axis=1
+                    )
                 )
                 when = times[:, -1] + d[:, -1] * mean / (1.0 - mean)
             found[rows[hit]] = True
