@@ -32,7 +32,9 @@ def _agree(model, starts: np.ndarray, steps: int) -> None:
     batch = simulate_batch(model, starts, steps=steps, record_events=True)
     for i, start in enumerate(starts):
         try:
-            ref = gaitopt.simulate(model, dict(zip(model.section.coordinates, start)), steps=steps)
+            ref = gaitopt.simulate(
+                model, dict(zip(model.section.coordinates, start, strict=True)), steps=steps
+            )
         except gaitopt.GaitoptInputError:
             assert batch.status[i] == "invalid start"
             continue

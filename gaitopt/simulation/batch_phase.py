@@ -203,7 +203,7 @@ class BatchPhases:
         m, n, u, p = idx.size, ph.n, self.u[idx], self.p
         x, t = self.y[idx, :n], self.t[idx]
         keep = np.ones(m, bool)
-        # a unilateral constraint that fails where the phase begins (PhaseFunctions.violated_at_start)
+        # a constraint that fails where the phase begins (PhaseFunctions.violated_at_start)
         n_tr = ph.n_tr
         for j, c in enumerate(ph.constraints):
             if c.at_start:
