@@ -274,6 +274,10 @@ class BasinFraction:
         ``steps``, ``hold``, ``tol``, ``seed``.
     elapsed : float
         Wall-clock seconds.
+    starts : numpy.ndarray or None
+        The starts (rows of section coordinates, their units).
+    outcomes : numpy.ndarray or None
+        Each start's outcome (``"converged"`` or why not).
     """
 
     fraction: float
@@ -284,6 +288,8 @@ class BasinFraction:
     window: dict[str, tuple[float, float]]
     settings: dict[str, Any]
     elapsed: float
+    starts: np.ndarray | None = None
+    outcomes: np.ndarray | None = None
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-able summary."""
@@ -982,4 +988,6 @@ def basin_fraction(
         box,
         {"steps": setup.steps, "hold": setup.hold, "tol": setup.tol, "seed": seed},
         time.perf_counter() - started,
+        starts,
+        np.array(outcomes),
     )
