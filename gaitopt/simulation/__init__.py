@@ -38,6 +38,7 @@ def simulate_batch(*args: Any, **kwargs: Any):
 
     return run(*args, **kwargs)
 
+
 #: SciPy's ``OdeSolver`` classes by name (``scipy.integrate`` is imported on first use: 0.4 s).
 _METHODS = ("DOP853", "RK45", "Radau", "LSODA")
 
