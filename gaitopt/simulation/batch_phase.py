@@ -19,8 +19,9 @@ import numpy as np
 
 from ..hybrid import rate_along
 from ..kernels.verify import CHECKS_PER_STEP, phase_events, verification_steps
+from .batch_events import event_functions, scan_crossings
 from .phase import _ARM, _CONSTRAINT_RATE, _CONSTRAINT_START
-from .vectorised import Mapped, brentq, dense
+from .vectorised import Mapped
 from .zeno import _ZENO_SPREAD, _ZENO_WINDOW
 
 __all__ = ["BatchPhases", "STATUS", "RUNNING"]
@@ -58,6 +59,10 @@ def _layout(model_cls) -> list[dict[str, list]]:
                 "constraint_rates": [rate_along(phase.flow, c.function) for c in phase.constraints],
             }
         )
+        probes, brents = event_functions(
+            phase, phase.n, len(model_cls.inputs), len(model_cls.parameter_specs())
+        )
+        out[-1].update(probes=probes, brents=brents)
     return out
 
 
@@ -126,6 +131,8 @@ class _Phase:
         self.rates = mapped(fs["rates"])
         self.curvatures = mapped(fs["curvatures"])
         self.constraint_rates = mapped(fs["constraint_rates"][: len(self.constraints)])
+        self.probes = [Mapped(f, shared=(6,)) for f in fs["probes"][: len(self.events)]]
+        self.brents = [Mapped(f, shared=(7,)) for f in fs["brents"][: len(self.events)]]
 
 
 class BatchPhases:
@@ -380,8 +387,8 @@ class BatchPhases:
         best_x = np.zeros((a.size, n))
         c = np.flatnonzero(crossing)
         if c.size:
-            self._crossings(ph, i, c, t_old, t_new, y_old, y_new, F, signed,
-                            best_t, best_k, best_x)  # fmt: skip
+            scan_crossings(self, ph, i, c, t_old, t_new, y_old, y_new, F, signed,
+                           (best_t, best_k, best_x))  # fmt: skip
         short = ~np.isnan(self.short[i])
         if short.any():
             over = np.all(self.armed[i, : ph.n_tr], axis=1) | (
@@ -395,92 +402,6 @@ class BatchPhases:
         ended = ~fired & (t_new - self.t_bound[i] >= 0)
         if ended.any():
             self._end(i[ended], TIMEOUT)
-
-    def _crossings(self, ph, i, c, t_old, t_new, y_old, y_new, F, signed, best_t, best_k, best_x):
-        """The starts ``c`` (rows of the accepted ones) whose step has a sign change: scan each
-        event's check points in order as ``integrate_phase`` does (confirm a bracket on the dense
-        output, locate it by Brent's method, test admissibility), all starts at once."""
-        u, p = self.u[i[c]], self.p
-        to, tn, yo, yn, Fc = t_old[c], t_new[c], y_old[c], y_new[c], F[c]
-        hc = tn - to
-        step = (tn - to) / _C
-        grid = np.arange(_C + 1)[None, :] * step[:, None] + to[:, None]
-        grid[:, -1] = tn
-
-        def g_at(event, rows, times, states=None):  # the signed guard on the dense output
-            if states is None:
-                states = dense(Fc[rows], yo[rows], to[rows], hc[rows], times)
-            out = ph.guards[event](rows.size, states, u[rows], p)[0][:, 0]
-            return ph.directions[event] * out
-
-        for ev in range(len(ph.events)):
-            previous = self.values[i[c], ev].copy()
-            was_armed = self.armed[i[c], ev].copy()
-            done = np.zeros(c.size, bool)
-            for j in range(1, _C + 1):
-                current = signed[c, ev, j - 1].copy()
-                cand = np.flatnonzero(~done & was_armed & (previous < 0) & (current >= 0))
-                if cand.size:  # confirm on the dense output itself
-                    start = g_at(ev, cand, grid[cand, j - 1])
-                    if j < _C:
-                        end = g_at(ev, cand, grid[cand, j])
-                    else:
-                        end = g_at(ev, cand, None, yn[cand])
-                    previous[cand], current[cand] = start, end
-                    hit = cand[(start < 0) & (end >= 0)]
-                    if hit.size:
-                        t_hit = self._locate(g_at, ev, hit, grid[hit, j - 1], grid[hit, j])
-                        x_hit = dense(Fc[hit], yo[hit], to[hit], hc[hit], t_hit)
-                        ok = self._admissible(ph, ev, x_hit, u[hit])
-                        take = hit[ok]
-                        better = t_hit[ok] < best_t[c[take]]
-                        rows = c[take[better]]
-                        best_t[rows], best_k[rows] = t_hit[ok][better], ev
-                        best_x[rows] = x_hit[ok][better]
-                        done[take] = True
-                live = ~done
-                was_armed[live] |= current[live] < -_ARM
-                previous[live] = current[live]
-            self.armed[i[c], ev] = was_armed
-            self.values[i[c], ev] = previous
-
-    @staticmethod
-    def _locate(g_at, ev, rows, a, b):
-        """``locate_crossing`` for many brackets: the time in ``(a, b]`` where the signed guard
-        goes from negative to non-negative (Brent's method; the same end cases)."""
-        t = np.empty(rows.size)
-        at_b = ~(g_at(ev, rows, b) >= 0)
-        t[at_b] = b[at_b]
-        after = np.minimum(np.nextafter(a, np.inf), b)
-        at_a = ~at_b & ~(g_at(ev, rows, a) < 0)
-        t[at_a] = after[at_a]
-        rest = np.flatnonzero(~at_b & ~at_a)
-        if rest.size:
-            root = brentq(lambda r, x: g_at(ev, rows[rest[r]], x), a[rest], b[rest])
-            t[rest] = root
-            for q in np.flatnonzero(root <= a[rest]):  # brentq ended on a: halve in floats
-                lo, hi = a[rest[q]], b[rest[q]]
-                row = rows[rest[q] : rest[q] + 1]
-                while True:
-                    mid = lo + 0.5 * (hi - lo)
-                    if not lo < mid < hi:
-                        break
-                    if g_at(ev, row, np.array([mid]))[0] >= 0:
-                        hi = mid
-                    else:
-                        lo = mid
-                t[rest[q]] = hi
-        return t
-
-    def _admissible(self, ph, ev, x, u) -> np.ndarray:
-        """``PhaseFunctions.admissible`` at the located crossings."""
-        m = x.shape[0]
-        if ev >= ph.n_tr:
-            if ph.constraints[ev - ph.n_tr].at_end:  # touchdown, not a violation
-                return np.abs(ph.guards[0](m, x, u, self.p)[0][:, 0]) > _CONSTRAINT_START
-            return np.ones(m, bool)
-        a = ph.admissible[ev]
-        return np.ones(m, bool) if a is None else a(m, x, u, self.p)[0][:, 0] > 0
 
     def _fire(self, ph, k, idx, event, t, x_minus) -> None:
         """The located transitions: a terminal outcome, or the reset into the next phase."""
