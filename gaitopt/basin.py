@@ -449,6 +449,10 @@ def _classify(setup: Mapping[str, Any], model: Any, start: np.ndarray) -> str:
 
 #: Starts per call of the batch simulation (bounds its memory: about 2 kB per start and step).
 _BLOCK = 4096
+#: Fewer starts than this go one by one (gaitopt.simulate): a batch costs about 1.4 ms of CPU
+#: per step try of all its starts together, a compass-gait start alone about 36 ms in all, so
+#: below some 40 starts the loop is faster (bench/basin.py's anatomy).
+_SMALL = 48
 
 
 def _classify_many(setup: Mapping[str, Any], model: Any, starts: np.ndarray) -> list[str]:
@@ -462,6 +466,8 @@ def _classify_many(setup: Mapping[str, Any], model: Any, starts: np.ndarray) -> 
     index = [model.state_names.index(c) for c in setup["coordinates"]]
     outcomes: list[str] = []
     starts = np.atleast_2d(np.asarray(starts, dtype=float))
+    if len(starts) < _SMALL:  # too few to repay the batch's fixed cost per step try
+        return [_classify(setup, model, start) for start in starts]
     for k in range(0, len(starts), _BLOCK):
         block = starts[k : k + _BLOCK]
         sim = simulate_batch(
@@ -578,11 +584,23 @@ def _rays_batch(points: list[Mapping[str, Any]]) -> list[dict[str, Any]]:
             below = grid[fates[i] & (grid < failed[0])]
             low[i] = below.max() if below.size else 0.0
     open_ = np.flatnonzero(~np.isnan(high))
-    for _ in range(bisections if open_.size else 0):
-        middle = 0.5 * (low[open_] + high[open_])
-        ok = converges(open_, middle)
-        low[open_] = np.where(ok, middle, low[open_])
-        high[open_] = np.where(ok, high[open_], middle)
+    left, runs = bisections if open_.size else 0, np.zeros(n, dtype=int)
+    while left:
+        # several halvings per batch: every midpoint the next `levels` halvings of each ray can
+        # visit (2**levels - 1, by the same 0.5 * (low + high) as one halving at a time, so the
+        # radii are those of sequential bisection), enough for a batch of _BISECT starts
+        levels = max(1, min(left, int(np.log2(_BISECT / open_.size + 1))))
+        tree = _midpoints(low[open_], high[open_], levels)  # rays × (2**levels − 1), in order
+        fate = converges(np.repeat(open_, tree.shape[1]), tree.ravel()).reshape(tree.shape)
+        runs[open_] += tree.shape[1]
+        node = np.zeros(open_.size, dtype=int)  # heap index of the midpoint taken next
+        for _ in range(levels):
+            middle = tree[np.arange(open_.size), node]
+            ok = fate[np.arange(open_.size), node]
+            low[open_] = np.where(ok, middle, low[open_])
+            high[open_] = np.where(ok, high[open_], middle)
+            node = 2 * node + np.where(ok, 2, 1)
+        left -= levels
     rays = []
     for i in range(n):
         if np.isnan(high[i]):
@@ -591,12 +609,28 @@ def _rays_batch(points: list[Mapping[str, Any]]) -> list[dict[str, Any]]:
         failed_first = grid[~fates[i]][0]
         beyond = [float(r) for r, ok in zip(grid, fates[i], strict=True) if ok and r > failed_first]
         rays.append({"radius": float(low[i]), "first_failure": float(high[i]),
-                     "beyond": beyond, "runs": scan + bisections})  # fmt: skip
+                     "beyond": beyond, "runs": scan + int(runs[i])})  # fmt: skip
     sizes = np.cumsum([0, *(len(p["directions"]) for p in points)])
     return [{"rays": rays[a:b]} for a, b in zip(sizes[:-1], sizes[1:], strict=True)]
 
 
 _rays_task.batched = _rays_batch  # type: ignore[attr-defined]
+#: Starts per round of the rays' bisection in a batch (several halvings per round).
+_BISECT = 256
+
+
+def _midpoints(low: np.ndarray, high: np.ndarray, levels: int) -> np.ndarray:
+    """Every midpoint ``levels`` halvings of ``[low, high]`` can visit, per row, in heap order
+    (node k's halves are 2k + 1, the lower, and 2k + 2), each ``0.5 * (a + b)`` of its bracket."""
+    count = 2**levels - 1
+    tree = np.empty((low.size, count))
+    brackets = {0: (low, high)}
+    for k in range(count):
+        a, b = brackets.pop(k)
+        tree[:, k] = m = 0.5 * (a + b)
+        if 2 * k + 2 < count:
+            brackets[2 * k + 1], brackets[2 * k + 2] = (a, m), (m, b)
+    return tree
 
 
 def _run(

@@ -110,3 +110,29 @@ def test_invalid_rows_and_bad_input(compass):
         simulate_batch(compass, [[1.0, 2.0]])
     with pytest.raises(gaitopt.GaitoptInputError, match="`inputs`"):
         simulate_batch(compass, [centre], inputs=[1.0, 2.0])
+
+
+def test_rays_in_lockstep_equal_rays_one_by_one():
+    """gaitopt.basin's rays in a batch (the scans together, several halvings per round from
+    every midpoint they can visit) give exactly the radii, first failures and flags of the rays
+    bisected one by one with one simulation per start (no tolerance: the same midpoints, the
+    same classifications)."""
+    from gaitopt.basin import _directions, _rays_batch, _rays_task, _setup
+
+    gait = gaitopt.find_limit_cycle(gaitopt.model("compass_gait"))
+    setup = _setup(gait, 12, 3, 1e-4, None)
+    coordinates = ["stance", "stance_dot"]
+    points = [
+        setup.point(
+            directions=[d], coordinates=coordinates, scan=4, bisections=7, max_radius=0.3
+        )  # fmt: skip
+        for d in _directions(4, 2, 0).tolist()
+    ]
+    together = _rays_batch(points)
+    alone = [_rays_task(point) for point in points]
+    for a, b in zip(together, alone, strict=True):
+        (ray_a,), (ray_b,) = a["rays"], b["rays"]
+        assert ray_a["radius"] == ray_b["radius"]
+        assert ray_a["first_failure"] == ray_b["first_failure"]
+        assert ray_a["beyond"] == ray_b["beyond"]
+    assert any(r["rays"][0]["first_failure"] is not None for r in alone)  # something bisected

@@ -1,6 +1,6 @@
 """``python -m gaitopt.kernels --warm [--jobs N] [MODEL ...]``: compile (or find in the cache) the
-shooting kernels and the verification's DOP853 steps of the built-in models, so that no later call
-waits for the compiler.  ``--jobs`` compiles that many models at once (default: the number of
+shooting kernels, the verification's DOP853 steps and the batch simulation's functions of the
+built-in models, so that no later call waits for the compiler.  ``--jobs`` compiles that many models at once (default: the number of
 CPUs); the cache is safe for concurrent compiles."""
 
 from __future__ import annotations
@@ -21,6 +21,9 @@ def _warm(name: str) -> tuple[str, str, float]:
     start = time.perf_counter()
     kern = model_kernels(REGISTRY[name])
     verification_steps(REGISTRY[name])  # the verification's DOP853 steps
+    from ..simulation.batch_phase import _compiled
+
+    _compiled(REGISTRY[name])  # the batch simulation's guards, resets and crossing locators
     how = "none (SX unavailable)" if kern is None else (
         "compiled" if kern.compiled else "interpreted")  # fmt: skip
     return name, how, time.perf_counter() - start

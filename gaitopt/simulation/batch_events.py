@@ -23,8 +23,9 @@ from .vectorised import brentq
 
 __all__ = ["ITERATIONS", "event_functions", "scan_crossings"]
 
-#: Brent iterations unrolled in the compiled locator (the dense-output guards here take 8–12).
-ITERATIONS = 24
+#: Brent iterations unrolled in the compiled locator (the dense-output guards here mostly take
+#: 6–10; a row that needs more is finished in NumPy).
+ITERATIONS = 12
 _XTOL, _RTOL = 1e-15, 4 * np.finfo(float).eps
 _C = CHECKS_PER_STEP
 
