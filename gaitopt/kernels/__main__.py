@@ -1,7 +1,7 @@
 """``python -m gaitopt.kernels --warm [--jobs N] [MODEL ...]``: compile (or find in the cache) the
 shooting kernels, the verification's DOP853 steps and the batch simulation's functions of the
-built-in models, so that no later call waits for the compiler.  ``--jobs`` compiles that many models at once (default: the number of
-CPUs); the cache is safe for concurrent compiles."""
+built-in models, so that no later call waits for the compiler.  ``--jobs`` compiles that many
+models at once (default: the number of CPUs); the cache is safe for concurrent compiles."""
 
 from __future__ import annotations
 
