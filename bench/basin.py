@@ -98,6 +98,7 @@ def run(*, quick: bool = False, batch: int | None = None, loop: int | None = Non
         "goal_met": loop_s / batch_s >= 50.0,
         "outcomes_agree_on_loop_starts": agree,
         "anatomy": {
+            "step_instructions": _instructions(model),
             "step_tries": kernel["starts"],
             "tries_per_start": kernel["starts"] / batch,
             "compiled_step_s": kernel["seconds"],
@@ -114,6 +115,15 @@ def run(*, quick: bool = False, batch: int | None = None, loop: int | None = Non
             f"processes at most double it",
         },
     }
+
+
+def _instructions(model) -> int:
+    """Instructions of the compass gait's DOP853 step with its event functions (CasADi SX)."""
+    from gaitopt.dop853 import step_function
+    from gaitopt.kernels.verify import CHECKS_PER_STEP, phase_events
+
+    phase = model.phases[0]
+    return step_function(phase.flow, phase_events(phase, True), CHECKS_PER_STEP).n_instructions()
 
 
 def main(argv: list[str] | None = None) -> int:
