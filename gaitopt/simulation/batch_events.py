@@ -45,13 +45,15 @@ def _dense(F, y_old, t_old, h, t):
 def event_functions(phase, flow_n: int, n_u: int, n_p: int) -> tuple[list, list]:
     """``(probes, brents)``: one of each per event of ``phase`` (transitions, then constraints),
     see the module."""
-    F = ca.SX.sym("F", flow_n, 7)
-    y_old = ca.SX.sym("y_old", flow_n)
-    t_old, h, t = ca.SX.sym("t_old"), ca.SX.sym("h"), ca.SX.sym("t")
-    lo, hi = ca.SX.sym("lo"), ca.SX.sym("hi")
-    u, p = ca.SX.sym("u", n_u), ca.SX.sym("p", n_p)
     n_tr = len(phase.transitions)
     guards = [tr.guard for tr in phase.transitions] + [c.function for c in phase.constraints]
+    rules = [tr.admissible for tr in phase.transitions if tr.admissible is not None]
+    S = ca.SX if all(f.is_a("SXFunction") for f in guards + rules) else ca.MX
+    F = S.sym("F", flow_n, 7)
+    y_old = S.sym("y_old", flow_n)
+    t_old, h, t = S.sym("t_old"), S.sym("h"), S.sym("t")
+    lo, hi = S.sym("lo"), S.sym("hi")
+    u, p = S.sym("u", n_u), S.sym("p", n_p)
     directions = [tr.direction for tr in phase.transitions] + [-1] * len(phase.constraints)
     probes, brents = [], []
     for ev, (guard, direction) in enumerate(zip(guards, directions, strict=True)):
@@ -62,16 +64,16 @@ def event_functions(phase, flow_n: int, n_u: int, n_p: int) -> tuple[list, list]
         x = _dense(F, y_old, t_old, h, t)
         if ev < n_tr:
             rule = phase.transitions[ev].admissible
-            a = rule(x, u, p)[0] if rule is not None else ca.SX(1.0)
+            a = rule(x, u, p)[0] if rule is not None else S(1.0)
         elif phase.constraints[ev - n_tr].at_end:  # touchdown, not a violation
             a = ca.fabs(guards[0](x, u, p)[0]) - _CONSTRAINT_START
         else:
-            a = ca.SX(1.0)
+            a = S(1.0)
         probes.append(
             ca.Function("probe", [F, y_old, t_old, h, t, u, p], [g(t), x, a],
                         ["F", "y_old", "t_old", "h", "t", "u", "p"], ["g", "x", "a"])
         )  # fmt: skip
-        root, converged = _brent(g, lo, hi)
+        root, converged = _brent(g, lo, hi, S)
         brents.append(
             ca.Function("brent", [F, y_old, t_old, h, lo, hi, u, p], [root, converged],
                         ["F", "y_old", "t_old", "h", "lo", "hi", "u", "p"],
@@ -80,12 +82,12 @@ def event_functions(phase, flow_n: int, n_u: int, n_p: int) -> tuple[list, list]
     return probes, brents
 
 
-def _brent(g, a, b):
-    """SciPy's ``brentq`` C iteration on ``g`` over ``[a, b]``, unrolled (SX)."""
+def _brent(g, a, b, S):
+    """SciPy's ``brentq`` C iteration on ``g`` over ``[a, b]``, unrolled (``S``: SX or MX)."""
     sel = ca.if_else
     xpre, xcur = a, b
     fpre, fcur = g(a), g(b)
-    xblk = fblk = spre = scur = ca.SX(0.0)
+    xblk = fblk = spre = scur = S(0.0)
     done = (fpre == 0) + (fcur == 0) > 0
     root = sel(fpre == 0, a, b)
     for _ in range(ITERATIONS):
