@@ -55,8 +55,8 @@ class Mapped:
         for i, (a, buf) in enumerate(zip(args, ins, strict=True)):
             if i in self.shared:
                 buf[:] = np.ravel(a)
-            else:
-                buf[: m * (buf.size // size)] = np.ravel(a)
+            elif buf.size:  # a start's entries together: the rows of ``a``, as they are
+                buf[: m * (buf.size // size)].reshape(m, -1)[...] = a.reshape(m, -1)
         trigger()
         return [out.reshape(size, -1)[:m].copy() for out in outs]
 
