@@ -262,14 +262,24 @@ class BatchPhases:
         m, n, u, p = idx.size, ph.n, self.u[idx], self.p
         x, t = self.y[idx, :n], self.t[idx]
         keep = np.ones(m, bool)
+        e, n_tr = len(ph.events), ph.n_tr
+        raw = [ph.guards[j](m, x, u, p)[0][:, 0] for j in range(e)]  # each event where it begins
+        known: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+        def rates(j: int) -> tuple[np.ndarray, np.ndarray]:  # signed ġ and g̈ of transition j
+            if j not in known:
+                d = ph.directions[j]
+                known[j] = (d * ph.rates[j](m, x, u, p)[0][:, 0],
+                            d * ph.curvatures[j](m, x, u, p)[0][:, 0])  # fmt: skip
+            return known[j]
+
         # a constraint that fails where the phase begins (PhaseFunctions.violated_at_start)
-        n_tr = ph.n_tr
         for j, c in enumerate(ph.constraints):
             if c.at_start:
                 rate = ph.constraint_rates[j](m, x, u, p)[0][:, 0]
                 bad = ~(rate > _CONSTRAINT_RATE)
             else:
-                bad = ph.guards[n_tr + j](m, x, u, p)[0][:, 0] < -_CONSTRAINT_START
+                bad = raw[n_tr + j] < -_CONSTRAINT_START
             bad &= keep
             if bad.any():
                 self._event(idx[bad], t[bad], k, c.outcome, x[bad], None)
@@ -281,17 +291,16 @@ class BatchPhases:
             for j, tr in enumerate(ph.phase.transitions):
                 if tr.terminal or not pending.any():
                     continue
-                d = ph.directions[j]
-                on = pending & (np.abs(d * ph.guards[j](m, x, u, p)[0][:, 0]) <= _ARM)
+                on = pending & (np.abs(ph.directions[j] * raw[j]) <= _ARM)
                 if not on.any():
                     continue
-                g1 = d * ph.rates[j](m, x, u, p)[0][:, 0]
-                g2 = d * ph.curvatures[j](m, x, u, p)[0][:, 0]
+                g1, g2 = rates(j)
                 rest = on & (np.abs(g1) <= _ARM) & (g2 > 0)
                 self.accumulation[idx[rest]] = t[rest]
                 self._end(idx[rest], STANDING)
                 pending &= ~rest
                 keep &= ~rest
+        rows = keep
         idx, x, t, u, m = idx[keep], x[keep], t[keep], u[keep], int(keep.sum())
         if not m:
             return
@@ -316,10 +325,7 @@ class BatchPhases:
         self.t0[idx], self.t_bound[idx] = t, t_bound
         self.new_step[idx], self.rejected[idx] = True, False
         # the guards where the phase begins: armed if strictly on the pre-crossing side
-        e = len(ph.events)
-        values = np.column_stack(
-            [ph.directions[j] * ph.guards[j](m, x, u, p)[0][:, 0] for j in range(e)]
-        )
+        values = np.column_stack([ph.directions[j] * raw[j][rows] for j in range(e)])
         self.values[idx, :e] = values
         self.armed[idx] = False
         self.armed[idx, :e] = values < -_ARM
@@ -329,8 +335,7 @@ class BatchPhases:
             unarmed = ~self.armed[idx, j]
             if not unarmed.any():
                 continue
-            g1 = ph.directions[j] * ph.rates[j](m, x, u, p)[0][:, 0]
-            g2 = ph.directions[j] * ph.curvatures[j](m, x, u, p)[0][:, 0]
+            g1, g2 = (r[rows] for r in rates(j))
             with np.errstate(all="ignore"):
                 cand = unarmed & (g1 < 0) & (0 < g2)
                 bound = np.where(cand, np.minimum(bound, 0.5 * np.abs(g1) / g2), bound)
