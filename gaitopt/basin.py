@@ -24,7 +24,11 @@ dimensionless fractions of the scale.
 Each estimate runs on :func:`gaitopt.sweep.sweep`, one point per ray or start, sent to Dask
 ``chunk`` points per task (the sweep's chunking):
 serially by default (``scheduler=None``), on a local Dask cluster (``"local"``) or a running
-scheduler (``"tcp://host:8786"``).
+scheduler (``"tcp://host:8786"``).  The starts are classified by the batch simulation
+(:func:`gaitopt.simulation.batch.simulate_batch`, the algorithm of :func:`gaitopt.simulate` on
+many starts at once): serially every start of an estimate in one batch, on Dask each task's
+chunk (the tasks' ``batched`` versions); the rays' scans in one batch and their bisection
+several halvings per batch; fewer than ``_SMALL`` starts one by one.
 """
 
 from __future__ import annotations
