@@ -266,7 +266,8 @@ class BatchPhases:
         raw = [ph.guards[j](m, x, u, p)[0][:, 0] for j in range(e)]  # each event where it begins
         known: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
-        def rates(j: int) -> tuple[np.ndarray, np.ndarray]:  # signed ġ and g̈ of transition j
+        def rates(j: int, m=m, x=x, u=u) -> tuple[np.ndarray, np.ndarray]:
+            """Signed ġ and g̈ of transition j at every start the phase began with."""
             if j not in known:
                 d = ph.directions[j]
                 known[j] = (d * ph.rates[j](m, x, u, p)[0][:, 0],
