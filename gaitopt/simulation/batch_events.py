@@ -135,6 +135,12 @@ def scan_crossings(run, ph, i, c, t_old, t_new, y_old, y_new, F, signed, best):
     for ev in range(len(ph.events)):
         previous = run.values[i[c], ev].copy()
         was_armed = run.armed[i[c], ev].copy()
+        changes = signed[c, ev]
+        before = np.concatenate([previous[:, None], changes[:, :-1]], axis=1)
+        if not np.any((before < 0) & (changes >= 0)):  # no sign change of this event: as a
+            run.armed[i[c], ev] = was_armed | np.any(changes < -_ARM, axis=1)  # quiet step
+            run.values[i[c], ev] = changes[:, -1]
+            continue
         done = np.zeros(c.size, bool)
         for j in range(1, _C + 1):
             current = signed[c, ev, j - 1].copy()
