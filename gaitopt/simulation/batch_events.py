@@ -119,11 +119,12 @@ def _brent(g, a, b, S):
 def scan_crossings(run, ph, i, c, t_old, t_new, y_old, y_new, F, signed, best):
     """The starts ``c`` (rows of the accepted starts ``i``) whose step changed a sign: each
     event's check points in order, as ``integrate_phase`` scans them (a bracket confirmed on the
-    dense output, located, admissible or not), all rows at once.  ``best`` = ``(t, event, x)``
+    dense output, located, admissible or not), all rows at once (``F``: their dense-output
+    coefficients, rows ``c`` only).  ``best`` = ``(t, event, x)``
     arrays over the accepted starts, updated with each start's earliest admissible crossing."""
     best_t, best_k, best_x = best
     u, p = run.u[i[c]], run.p
-    to, tn, yn, Fc = t_old[c], t_new[c], y_new[c], F[c]
+    to, tn, yn, Fc = t_old[c], t_new[c], y_new[c], F  # F: the rows c already
     yo, hc = y_old[c], tn - to
     step = (tn - to) / _C
     grid = np.arange(_C + 1)[None, :] * step[:, None] + to[:, None]

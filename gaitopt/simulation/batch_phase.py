@@ -380,7 +380,6 @@ class BatchPhases:
         i = idx[a]
         t_old, t_new, y_old, y_new = t[a], t_new[a], y[a], y_new[a]
         self.t[i], self.y[i, :n], self.f[i, :n] = t_new, y_new, f_new[a]
-        F = F[a].reshape(-1, 7, n)
         signed = ph.directions[None, :, None] * G[a].reshape(-1, _C, e).transpose(0, 2, 1)
         values, armed = self.values[i, :e], self.armed[i, :e]
         before = np.concatenate([values[:, :, None], signed[:, :, :-1]], axis=2)
@@ -393,6 +392,7 @@ class BatchPhases:
         best_x = np.zeros((a.size, n))
         c = np.flatnonzero(crossing)
         if c.size:
+            F = F[a[c]].reshape(-1, 7, n)  # the dense output of the crossing rows only
             scan_crossings(self, ph, i, c, t_old, t_new, y_old, y_new, F, signed,
                            (best_t, best_k, best_x))  # fmt: skip
         short = ~np.isnan(self.short[i])
