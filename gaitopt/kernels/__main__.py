@@ -21,9 +21,9 @@ def _warm(name: str) -> tuple[str, str, float]:
     start = time.perf_counter()
     kern = model_kernels(REGISTRY[name])
     verification_steps(REGISTRY[name])  # the verification's DOP853 steps
-    from ..simulation.batch_phase import _compiled
+    from ..simulation.batch_events import compiled_functions
 
-    _compiled(REGISTRY[name])  # the batch simulation's guards, resets and crossing locators
+    compiled_functions(REGISTRY[name])  # the batch simulation's guards, resets, locators
     how = "none (SX unavailable)" if kern is None else (
         "compiled" if kern.compiled else "interpreted")  # fmt: skip
     return name, how, time.perf_counter() - start

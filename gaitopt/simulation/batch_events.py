@@ -14,14 +14,17 @@ by :func:`gaitopt.simulation.vectorised.brentq` (the same iteration again, in Nu
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import casadi as ca
 import numpy as np
 
-from ..kernels.verify import CHECKS_PER_STEP
+from ..hybrid import rate_along
+from ..kernels.verify import CHECKS_PER_STEP, phase_events
 from .phase import _ARM, _CONSTRAINT_START
 from .vectorised import brentq
 
-__all__ = ["ITERATIONS", "event_functions", "scan_crossings"]
+__all__ = ["ITERATIONS", "compiled_functions", "event_functions", "scan_crossings"]
 
 #: Brent iterations unrolled in the compiled locator (the dense-output guards here mostly take
 #: 6–10; a row that needs more is finished in NumPy).
@@ -40,6 +43,64 @@ def _dense(F, y_old, t_old, h, t):
             y = y + F[:, 6 - i]
         y = y * x if i % 2 == 0 else y * (1 - x)
     return y + y_old
+
+
+def _layout(model_cls) -> list[dict[str, list]]:
+    """Per phase, the functions the batch evaluates besides the step, by role (None where a
+    transition has none): flow, events (guards, then constraints), admissibility, resets, the
+    guards' first and second rates along the flow, the constraints' rates."""
+    out = []
+    for phase in model_cls._structure().phases:
+        rates = [rate_along(phase.flow, t.guard) for t in phase.transitions]
+        out.append(
+            {
+                "flow": [phase.flow],
+                "events": phase_events(phase, True),
+                "admissible": [t.admissible for t in phase.transitions],
+                "resets": [t.reset for t in phase.transitions],
+                "rates": rates,
+                "curvatures": [rate_along(phase.flow, r) for r in rates],
+                "constraint_rates": [rate_along(phase.flow, c.function) for c in phase.constraints],
+            }
+        )
+        probes, brents = event_functions(
+            phase, phase.n, len(model_cls.inputs), len(model_cls.parameter_specs())
+        )
+        out[-1].update(probes=probes, brents=brents)
+    return out
+
+
+@lru_cache(maxsize=64)
+def compiled_functions(model_cls) -> list[dict[str, list]]:
+    """:func:`_layout` compiled into one library per model class (cached like the other
+    kernels, :mod:`gaitopt.kernels.cache`): a guard, rate or reset mapped over many starts is
+    then one C loop, not CasADi's interpreter per start.  The interpreted functions where there
+    is no compiler."""
+    import casadi as ca
+
+    from ..kernels.cache import load, source_key
+
+    layout = _layout(model_cls)
+    slots = [(i, role, j) for i, roles in enumerate(layout) for role, fs in roles.items()
+             for j, f in enumerate(fs) if f is not None]  # fmt: skip
+
+    def build() -> list:
+        functions = []
+        for i, role, j in slots:
+            f = layout[i][role][j]
+            args = f.sx_in() if f.is_a("SXFunction") else f.mx_in()
+            functions.append(ca.Function(f"batch_{i}_{role}_{j}", args, f.call(args),
+                                         f.name_in(), f.name_out()))  # fmt: skip
+        return functions
+
+    name = f"gaitopt_{model_cls.__name__.lower()}_batch"
+    try:
+        functions, _ = load(name, build, key=source_key(name, model_cls))
+    except (RuntimeError, TypeError, NotImplementedError):
+        return layout
+    for (i, role, j), f in zip(slots, functions, strict=True):
+        layout[i][role][j] = f
+    return layout
 
 
 def event_functions(phase, flow_n: int, n_u: int, n_p: int) -> tuple[list, list]:

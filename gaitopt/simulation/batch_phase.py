@@ -13,13 +13,10 @@ earliest admissible one per start fired (a reset into the next phase, or a termi
 
 from __future__ import annotations
 
-from functools import lru_cache
-
 import numpy as np
 
-from ..hybrid import rate_along
 from ..kernels.verify import CHECKS_PER_STEP, phase_events, verification_steps
-from .batch_events import event_functions, scan_crossings
+from .batch_events import compiled_functions, scan_crossings
 from .phase import _ARM, _CONSTRAINT_RATE, _CONSTRAINT_START
 from .vectorised import Mapped
 from .zeno import _ZENO_SPREAD, _ZENO_WINDOW
@@ -39,64 +36,6 @@ def _rms(v: np.ndarray) -> np.ndarray:
     does (bit for bit: the step sizes then follow SciPy's exactly)."""
     v = np.ascontiguousarray(v)
     return np.sqrt((v[:, None, :] @ v[:, :, None])[:, 0, 0]) / v.shape[1] ** 0.5
-
-
-def _layout(model_cls) -> list[dict[str, list]]:
-    """Per phase, the functions the batch evaluates besides the step, by role (None where a
-    transition has none): flow, events (guards, then constraints), admissibility, resets, the
-    guards' first and second rates along the flow, the constraints' rates."""
-    out = []
-    for phase in model_cls._structure().phases:
-        rates = [rate_along(phase.flow, t.guard) for t in phase.transitions]
-        out.append(
-            {
-                "flow": [phase.flow],
-                "events": phase_events(phase, True),
-                "admissible": [t.admissible for t in phase.transitions],
-                "resets": [t.reset for t in phase.transitions],
-                "rates": rates,
-                "curvatures": [rate_along(phase.flow, r) for r in rates],
-                "constraint_rates": [rate_along(phase.flow, c.function) for c in phase.constraints],
-            }
-        )
-        probes, brents = event_functions(
-            phase, phase.n, len(model_cls.inputs), len(model_cls.parameter_specs())
-        )
-        out[-1].update(probes=probes, brents=brents)
-    return out
-
-
-@lru_cache(maxsize=64)
-def _compiled(model_cls) -> list[dict[str, list]]:
-    """:func:`_layout` compiled into one library per model class (cached like the other
-    kernels, :mod:`gaitopt.kernels.cache`): a guard, rate or reset mapped over many starts is
-    then one C loop, not CasADi's interpreter per start.  The interpreted functions where there
-    is no compiler."""
-    import casadi as ca
-
-    from ..kernels.cache import load, source_key
-
-    layout = _layout(model_cls)
-    slots = [(i, role, j) for i, roles in enumerate(layout) for role, fs in roles.items()
-             for j, f in enumerate(fs) if f is not None]  # fmt: skip
-
-    def build() -> list:
-        functions = []
-        for i, role, j in slots:
-            f = layout[i][role][j]
-            args = f.sx_in() if f.is_a("SXFunction") else f.mx_in()
-            functions.append(ca.Function(f"batch_{i}_{role}_{j}", args, f.call(args),
-                                         f.name_in(), f.name_out()))  # fmt: skip
-        return functions
-
-    name = f"gaitopt_{model_cls.__name__.lower()}_batch"
-    try:
-        functions, _ = load(name, build, key=source_key(name, model_cls))
-    except (RuntimeError, TypeError, NotImplementedError):
-        return layout
-    for (i, role, j), f in zip(slots, functions, strict=True):
-        layout[i][role][j] = f
-    return layout
 
 
 class _Phase:
@@ -119,7 +58,7 @@ class _Phase:
 
             kernel = step_function(phase.flow, self.events, _C)
         self.step = Mapped(kernel, shared=(3, 5, 6))
-        fs = _compiled(type(model))[index]
+        fs = compiled_functions(type(model))[index]
 
         def mapped(functions):
             return [Mapped(f, shared=(2,)) if f is not None else None for f in functions]
