@@ -174,7 +174,7 @@ def run(
     if basin:
         log("[bench] basin throughput: batch simulation vs the per-start loop (compass gait)")
         try:
-            record["basin"] = _bench_basin.run(quick=quick)
+            record["basin"] = _bench_basin.run(quick=quick, rounds=1 if quick else 3)
         except Exception as err:  # report, never sink the benchmark
             record["basin"] = {"skipped": f"{type(err).__name__}: {err}"}
     record["goals_issue_12"] = _bench_speed.goals(record)
