@@ -9,9 +9,10 @@ the next phase; a state resting on a guard and an accumulation of impacts as ``"
 N starts at once: every array of the integrator has a row per start, each row has its own step
 size, rejections, armed guards and phase, and masks retire the starts that end.  One step try of
 all the starts in a phase is one call of the compiled step ``map``-ped over them
-(:class:`~gaitopt.simulation.vectorised.Mapped`); crossings are confirmed, located (Brent's method
-in lockstep over every bracket, :func:`~gaitopt.simulation.vectorised.brentq`) and reset for all
-the starts that cross in that step at once.  There is no Python per start and step.
+(:class:`~gaitopt.simulation.vectorised.Mapped`); crossings are confirmed, located (compiled
+probes of the dense output and SciPy's Brent iteration unrolled, for every bracket at once:
+:mod:`gaitopt.simulation.batch_events`) and reset for all the starts that cross in that step at
+once.  There is no Python per start and step.
 
 It is the same method as :func:`gaitopt.simulate`, not a new one: its events agree with the
 per-start simulation to rounding (the tests check 1e-10), and like it, it is a different method
