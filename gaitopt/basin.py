@@ -593,7 +593,10 @@ def _rays_batch(points: list[Mapping[str, Any]]) -> list[dict[str, Any]]:
         # several halvings per batch: every midpoint the next `levels` halvings of each ray can
         # visit (2**levels - 1, by the same 0.5 * (low + high) as one halving at a time, so the
         # radii are those of sequential bisection), enough for a batch of _BISECT starts
-        levels = max(1, min(left, int(np.log2(_BISECT / open_.size + 1))))
+        # (few rays: one halving at a time, start by start, as many simulations as one by one)
+        levels = max(1, min(left, _LEVELS, int(np.log2(_BISECT / open_.size + 1))))
+        if 3 * open_.size < _SMALL:
+            levels = 1
         tree = _midpoints(low[open_], high[open_], levels)  # rays × (2**levels − 1), in order
         fate = converges(np.repeat(open_, tree.shape[1]), tree.ravel()).reshape(tree.shape)
         runs[open_] += tree.shape[1]
@@ -619,8 +622,10 @@ def _rays_batch(points: list[Mapping[str, Any]]) -> list[dict[str, Any]]:
 
 
 _rays_task.batched = _rays_batch  # type: ignore[attr-defined]
-#: Starts per round of the rays' bisection in a batch (several halvings per round).
+#: Starts per round of the rays' bisection in a batch (several halvings per round), and the most
+#: halvings per round (each costs twice the simulations of the one before).
 _BISECT = 256
+_LEVELS = 3
 
 
 def _midpoints(low: np.ndarray, high: np.ndarray, levels: int) -> np.ndarray:

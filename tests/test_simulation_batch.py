@@ -113,7 +113,7 @@ def test_invalid_rows_and_bad_input(compass):
 
 
 def test_rays_in_lockstep_equal_rays_one_by_one():
-    """gaitopt.basin's rays in a batch (the scans together, several halvings per round from
+    """gaitopt.basin's 16 rays in a batch (the scans together, three halvings per round from
     every midpoint they can visit) give exactly the radii, first failures and flags of the rays
     bisected one by one with one simulation per start (no tolerance: the same midpoints, the
     same classifications)."""
@@ -124,9 +124,9 @@ def test_rays_in_lockstep_equal_rays_one_by_one():
     coordinates = ["stance", "stance_dot"]
     points = [
         setup.point(
-            directions=[d], coordinates=coordinates, scan=4, bisections=7, max_radius=0.3
+            directions=[d], coordinates=coordinates, scan=4, bisections=6, max_radius=0.3
         )  # fmt: skip
-        for d in _directions(4, 2, 0).tolist()
+        for d in _directions(16, 2, 0).tolist()  # enough rays for batches (basin._SMALL)
     ]
     together = _rays_batch(points)
     alone = [_rays_task(point) for point in points]
@@ -136,3 +136,7 @@ def test_rays_in_lockstep_equal_rays_one_by_one():
         assert ray_a["first_failure"] == ray_b["first_failure"]
         assert ray_a["beyond"] == ray_b["beyond"]
     assert any(r["rays"][0]["first_failure"] is not None for r in alone)  # something bisected
+    # the batch simulated every midpoint of its rounds (more starts than one by one): it did
+    # take several halvings per round
+    pairs = zip(together, alone, strict=True)
+    assert any(a["rays"][0]["runs"] > b["rays"][0]["runs"] for a, b in pairs)
