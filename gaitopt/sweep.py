@@ -119,7 +119,10 @@ def sweep(
         chunk's points with one fsync).  Default: enough points that each of the cluster's
         workers gets about four tasks (at most :data:`MAX_CHUNK` points each), so that a task
         is long against Dask's per-task overhead (its guidance: ≥ ~100 ms) and the work still
-        balances.  Resumption stays per point: a journal records each point.
+        balances.  Resumption stays per point: a journal records each point.  A task with a
+        ``batched`` attribute (``task.batched(points)``, equal to ``[task(p) for p in
+        points]``: the basin's batch simulations) runs each chunk in one call, and serially
+        every point in one call.
     progress : bool
         Show a progress bar (tqdm) on stderr.
     description : str
