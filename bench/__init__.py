@@ -7,5 +7,6 @@ runs), :mod:`bench.control` (the deadbeat decision), :mod:`bench.reference` (ref
 goals), :mod:`bench.table` (the printed report), :mod:`bench.common` (shared helpers),
 :mod:`bench.baselines` (hand-written SciPy return maps),
 :mod:`bench.branches` (continuation and sweeps), :mod:`bench.curves` (two-parameter curves),
-:mod:`bench.optimize` (optimal gaits).
+:mod:`bench.optimize` (optimal gaits), :mod:`bench.basin` (basin throughput: batch simulation
+against the per-start loop).
 """

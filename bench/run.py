@@ -61,6 +61,7 @@ from typing import Any
 
 from gaitopt.files import write_json
 
+from . import basin as _bench_basin
 from . import branches as _bench_branches
 from . import curves as _bench_curves
 from . import first_call as _bench_first_call
@@ -88,6 +89,7 @@ def run(
     decisions: int = 200,
     branches: bool = True,
     speed: bool = True,
+    basin: bool = True,
     quick: bool = False,
     log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True),
 ) -> dict[str, Any]:
@@ -175,6 +177,12 @@ def run(
             record["optimize"] = _bench_optimize.run(quick=quick)
         except Exception as err:  # report, never sink the benchmark
             record["optimize"] = {"skipped": f"{type(err).__name__}: {err}"}
+    if basin:
+        log("[bench] basin throughput: batch simulation vs the per-start loop (compass gait)")
+        try:
+            record["basin"] = _bench_basin.run(quick=quick, rounds=1 if quick else 3)
+        except Exception as err:  # report, never sink the benchmark
+            record["basin"] = {"skipped": f"{type(err).__name__}: {err}"}
     record["goals_issue_12"] = _bench_speed.goals(record)
     record["elapsed_s"] = time.perf_counter() - started
     return record
@@ -228,6 +236,9 @@ def main(argv: list[str] | None = None) -> int:
         help="skip the whole-process and period-k timings",
     )
     parser.add_argument(
+        "--no-basin", action="store_true", help="skip the basin throughput (batch vs loop)"
+    )
+    parser.add_argument(
         "--quick",
         action="store_true",
         help="2 repeats, 5 calls once built, no Drake convergence runs",
@@ -254,6 +265,7 @@ def main(argv: list[str] | None = None) -> int:
         decisions=max(20, args.decisions // (4 if args.quick else 1)),
         branches=not args.no_branches,
         speed=not args.no_speed,
+        basin=not args.no_basin,
         quick=args.quick,
     )
     record["table"] = rows(record)

@@ -24,7 +24,11 @@ dimensionless fractions of the scale.
 Each estimate runs on :func:`gaitopt.sweep.sweep`, one point per ray or start, sent to Dask
 ``chunk`` points per task (the sweep's chunking):
 serially by default (``scheduler=None``), on a local Dask cluster (``"local"``) or a running
-scheduler (``"tcp://host:8786"``).
+scheduler (``"tcp://host:8786"``).  The starts are classified by the batch simulation
+(:func:`gaitopt.simulation.batch.simulate_batch`, the algorithm of :func:`gaitopt.simulate` on
+many starts at once): serially every start of an estimate in one batch, on Dask each task's
+chunk (the tasks' ``batched`` versions); the rays' scans in one batch and their bisection
+several halvings per batch; fewer than ``_SMALL`` starts one by one.
 """
 
 from __future__ import annotations
@@ -274,6 +278,10 @@ class BasinFraction:
         ``steps``, ``hold``, ``tol``, ``seed``.
     elapsed : float
         Wall-clock seconds.
+    starts : numpy.ndarray or None
+        The starts (rows of section coordinates, their units).
+    outcomes : numpy.ndarray or None
+        Each start's outcome (``"converged"`` or why not).
     """
 
     fraction: float
@@ -284,6 +292,8 @@ class BasinFraction:
     window: dict[str, tuple[float, float]]
     settings: dict[str, Any]
     elapsed: float
+    starts: np.ndarray | None = None
+    outcomes: np.ndarray | None = None
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-able summary."""
@@ -441,6 +451,47 @@ def _classify(setup: Mapping[str, Any], model: Any, start: np.ndarray) -> str:
     return "converged" if arrival < setup["steps"] else "not converged"
 
 
+#: Starts per call of the batch simulation (bounds its memory: about 2 kB per start and step).
+_BLOCK = 4096
+#: Fewer starts than this go one by one (gaitopt.simulate): a batch costs about 1.4 ms of CPU
+#: per step try of all its starts together, a compass-gait start alone about 36 ms in all, so
+#: below some 40 starts the loop is faster (bench/basin.py's anatomy).
+_SMALL = 48
+
+
+def _classify_many(setup: Mapping[str, Any], model: Any, starts: np.ndarray) -> list[str]:
+    """:func:`_classify` for many starts at once: the same simulations (the algorithm of
+    :func:`gaitopt.simulate`), all starts stepped together by
+    :func:`gaitopt.simulation.batch.simulate_batch`, and the same rule."""
+    from .simulation.batch import simulate_batch
+
+    centre, scale = np.asarray(setup["centre"]), np.asarray(setup["scale"])
+    period, tol, steps = setup["period"], setup["tol"], setup["steps"]
+    index = [model.state_names.index(c) for c in setup["coordinates"]]
+    outcomes: list[str] = []
+    starts = np.atleast_2d(np.asarray(starts, dtype=float))
+    if len(starts) < _SMALL:  # too few to repay the batch's fixed cost per step try
+        return [_classify(setup, model, start) for start in starts]
+    for k in range(0, len(starts), _BLOCK):
+        block = starts[k : k + _BLOCK]
+        sim = simulate_batch(
+            model, block, steps=(steps + setup["hold"]) * period, inputs=setup["inputs"]
+        )
+        returns = sim.section_states[:, period::period][:, :, index]  # starts × periods × s
+        within = np.all(np.abs(returns - centre) <= tol * scale, axis=2)  # NaN compares False
+        outside = ~within
+        last = np.where(
+            outside.any(axis=1), outside.shape[1] - 1 - np.argmax(outside[:, ::-1], axis=1), -1
+        )
+        arrival = last + 1  # index of the first period that stays
+        for status, arrived in zip(sim.status, arrival, strict=True):
+            if status != "completed":
+                outcomes.append(str(status))
+            else:
+                outcomes.append("converged" if arrived < steps else "not converged")
+    return outcomes
+
+
 def _model_of(setup: Mapping[str, Any]) -> Any:
     from .models import model as make_model
 
@@ -452,6 +503,23 @@ def _starts_task(point: Mapping[str, Any]) -> dict[str, Any]:
     setup = point["setup"]
     model = _model_of(setup)
     return {"outcomes": [_classify(setup, model, np.asarray(s)) for s in point["starts"]]}
+
+
+def _starts_batch(points: list[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """:func:`_starts_task` on many points (one setup): every start in one batch simulation."""
+    if not points:
+        return []
+    setup = points[0]["setup"]
+    if any(point["setup"] != setup for point in points):
+        return [_starts_task(point) for point in points]
+    sizes = [len(point["starts"]) for point in points]
+    starts = np.array([s for point in points for s in point["starts"]], dtype=float)
+    outcomes = _classify_many(setup, _model_of(setup), starts) if len(starts) else []
+    bounds = np.cumsum([0, *sizes])
+    return [{"outcomes": outcomes[a:b]} for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+
+_starts_task.batched = _starts_batch  # type: ignore[attr-defined]
 
 
 def _rays_task(point: Mapping[str, Any]) -> dict[str, Any]:
@@ -485,6 +553,93 @@ def _rays_task(point: Mapping[str, Any]) -> dict[str, Any]:
         beyond = [r for r, ok in zip(grid, fates, strict=True) if ok and r > failed[0]]
         rays.append({"radius": low, "first_failure": high, "beyond": beyond, "runs": runs})
     return {"rays": rays}
+
+
+def _rays_batch(points: list[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """:func:`_rays_task` on many points (one setup), the rays in lockstep: every ray's scan in
+    one batch simulation, then each round of bisection (one radius per ray still bracketing)
+    in one batch.  The same radii, the same rule, every start simulated."""
+    if not points:
+        return []
+    setup = points[0]["setup"]
+    keys = ("setup", "coordinates", "scan", "bisections", "max_radius")
+    if any(any(p[k] != points[0][k] for k in keys) for p in points):
+        return [_rays_task(point) for point in points]
+    model = _model_of(setup)
+    centre, scale = np.asarray(setup["centre"]), np.asarray(setup["scale"])
+    index = [setup["coordinates"].index(c) for c in points[0]["coordinates"]]
+    scan, bisections, top = points[0]["scan"], points[0]["bisections"], points[0]["max_radius"]
+    directions = np.array([d for p in points for d in p["directions"]], dtype=float)
+    steps = np.zeros((len(directions), len(centre)))
+    steps[:, index] = directions * scale[index]
+    grid = np.array([top * k / scan for k in range(1, scan + 1)])
+
+    def converges(rows: np.ndarray, radii: np.ndarray) -> np.ndarray:
+        starts = centre + radii[:, None] * steps[rows]
+        return np.array(_classify_many(setup, model, starts)) == "converged"
+
+    n = len(directions)
+    fates = converges(np.repeat(np.arange(n), scan), np.tile(grid, n)).reshape(n, scan)
+    low, high = np.zeros(n), np.full(n, np.nan)
+    for i in range(n):
+        failed = grid[~fates[i]]
+        if failed.size:
+            high[i] = failed[0]
+            below = grid[fates[i] & (grid < failed[0])]
+            low[i] = below.max() if below.size else 0.0
+    open_ = np.flatnonzero(~np.isnan(high))
+    left, runs = bisections if open_.size else 0, np.zeros(n, dtype=int)
+    while left:
+        # several halvings per batch: every midpoint the next `levels` halvings of each ray can
+        # visit (2**levels - 1, by the same 0.5 * (low + high) as one halving at a time, so the
+        # radii are those of sequential bisection), enough for a batch of _BISECT starts
+        # (few rays: one halving at a time, start by start, as many simulations as one by one)
+        levels = max(1, min(left, _LEVELS, int(np.log2(_BISECT / open_.size + 1))))
+        if 3 * open_.size < _SMALL:
+            levels = 1
+        tree = _midpoints(low[open_], high[open_], levels)  # rays × (2**levels − 1), in order
+        fate = converges(np.repeat(open_, tree.shape[1]), tree.ravel()).reshape(tree.shape)
+        runs[open_] += tree.shape[1]
+        node = np.zeros(open_.size, dtype=int)  # heap index of the midpoint taken next
+        for _ in range(levels):
+            middle = tree[np.arange(open_.size), node]
+            ok = fate[np.arange(open_.size), node]
+            low[open_] = np.where(ok, middle, low[open_])
+            high[open_] = np.where(ok, high[open_], middle)
+            node = 2 * node + np.where(ok, 2, 1)
+        left -= levels
+    rays = []
+    for i in range(n):
+        if np.isnan(high[i]):
+            rays.append({"radius": top, "first_failure": None, "beyond": [], "runs": scan})
+            continue
+        failed_first = grid[~fates[i]][0]
+        beyond = [float(r) for r, ok in zip(grid, fates[i], strict=True) if ok and r > failed_first]
+        rays.append({"radius": float(low[i]), "first_failure": float(high[i]),
+                     "beyond": beyond, "runs": scan + int(runs[i])})  # fmt: skip
+    sizes = np.cumsum([0, *(len(p["directions"]) for p in points)])
+    return [{"rays": rays[a:b]} for a, b in zip(sizes[:-1], sizes[1:], strict=True)]
+
+
+_rays_task.batched = _rays_batch  # type: ignore[attr-defined]
+#: Starts per round of the rays' bisection in a batch (several halvings per round), and the most
+#: halvings per round (each costs twice the simulations of the one before).
+_BISECT = 256
+_LEVELS = 3
+
+
+def _midpoints(low: np.ndarray, high: np.ndarray, levels: int) -> np.ndarray:
+    """Every midpoint ``levels`` halvings of ``[low, high]`` can visit, per row, in heap order
+    (node k's halves are 2k + 1, the lower, and 2k + 2), each ``0.5 * (a + b)`` of its bracket."""
+    count = 2**levels - 1
+    tree = np.empty((low.size, count))
+    brackets = {0: (low, high)}
+    for k in range(count):
+        a, b = brackets.pop(k)
+        tree[:, k] = m = 0.5 * (a + b)
+        if 2 * k + 2 < count:
+            brackets[2 * k + 1], brackets[2 * k + 2] = (a, m), (m, b)
+    return tree
 
 
 def _run(
@@ -876,4 +1031,6 @@ def basin_fraction(
         box,
         {"steps": setup.steps, "hold": setup.hold, "tol": setup.tol, "seed": seed},
         time.perf_counter() - started,
+        starts,
+        np.array(outcomes),
     )

@@ -119,7 +119,10 @@ def sweep(
         chunk's points with one fsync).  Default: enough points that each of the cluster's
         workers gets about four tasks (at most :data:`MAX_CHUNK` points each), so that a task
         is long against Dask's per-task overhead (its guidance: ≥ ~100 ms) and the work still
-        balances.  Resumption stays per point: a journal records each point.
+        balances.  Resumption stays per point: a journal records each point.  A task with a
+        ``batched`` attribute (``task.batched(points)``, equal to ``[task(p) for p in
+        points]``: the basin's batch simulations) runs each chunk in one call, and serially
+        every point in one call.
     progress : bool
         Show a progress bar (tqdm) on stderr.
     description : str
@@ -165,7 +168,12 @@ MAX_CHUNK = 10_000
 
 
 def run_chunk(task: Task, chunk: Sequence[Mapping[str, Any]]) -> list[Mapping[str, Any]]:
-    """One Dask task: ``task`` on each point of ``chunk``, in order."""
+    """One Dask task: ``task`` on each point of ``chunk``, in order (all at once where the task
+    has a ``batched`` version: ``task.batched(points)``, equal to ``[task(p) for p in
+    points]``, e.g. a batch simulation of every point's starts together)."""
+    batched = getattr(task, "batched", None)
+    if callable(batched):
+        return list(batched(list(chunk)))
     return [task(point) for point in chunk]
 
 
@@ -178,6 +186,9 @@ def _run(task: Task, points, todo, scheduler, workers, chunk):
     if not todo:
         return
     if scheduler == "serial":
+        if callable(getattr(task, "batched", None)):  # every point in one batch
+            yield list(zip(todo, run_chunk(task, [points[i] for i in todo]), strict=True))
+            return
         for i in todo:
             yield [(i, task(points[i]))]
         return

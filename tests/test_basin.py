@@ -212,6 +212,11 @@ def test_cli_json_fields(capsys, tmp_path):
     assert set(out["timings"]) == {"solve_s", "rays_s", "fraction_s", "total_s"}
     assert "star-shaped" in out["assumption"]
     assert (tmp_path / "b" / "basin.json").exists() and (tmp_path / "b" / "basin.png").exists()
+    with np.load(tmp_path / "b" / "basin.npz") as table:  # every sampled start, its outcome
+        assert table["fraction_starts"].shape == (10, 1)
+        converged = np.mean(table["fraction_outcomes"] == "converged")
+        assert converged == out["fraction"]["fraction"]
+        assert table["ray_radii"].tolist() == out["radii"]
 
 
 @pytest.mark.parametrize("argv", [["--rays", "0"], ["--steps", "0"], ["--samples", "999999"]])

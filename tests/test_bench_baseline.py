@@ -76,6 +76,7 @@ def test_bench_record_and_table(tmp_path):
         control=False,
         branches=False,
         speed=False,
+        basin=False,
         log=lambda s: None,
     )
     record["table"] = bench.rows(record)
@@ -88,6 +89,21 @@ def test_bench_record_and_table(tmp_path):
     assert data["machine"]["cpu_count"] >= 1 and data["drake"]["available"] is False
     text = bench.format_table(record)
     assert "solve_ivp + fsolve" in text and "rimless_wheel" in text
+
+
+def test_basin_throughput_record():
+    """bench/basin.py at a tiny size (64 batched starts, 4 looped): the record's fields, and the
+    looped starts' outcomes equal the batch's (the per-start simulation is the referee; no
+    timing is asserted)."""
+    from bench.basin import run as basin_run
+
+    record = basin_run(batch=64, loop=4, rounds=1)
+    assert record["outcomes_agree_on_loop_starts"] is True
+    assert sum(record["batch"]["outcomes"].values()) == 64
+    anatomy = record["anatomy"]
+    assert anatomy["step_tries"] >= 64 and 0 < anatomy["compiled_step_share"] < 1
+    assert anatomy["step_instructions"] > 0
+    assert record["ratio"] > 0 and record["study_10_min"]["starts_one_process"] > 0
 
 
 def test_optimal_gait_baseline_reaches_the_compass_optimum():

@@ -494,6 +494,15 @@ def test_compass_gait_basin_study_confirms_the_ray_estimate_on_the_grid(tmp_path
     rows = (folder / "slice.csv").read_text(encoding="utf-8").splitlines()
     assert len(rows) == 1 + 121
     assert (folder / "basin_slice.png").stat().st_size > 0
+    # the columnar file beside the figure: every classified start with its outcome
+    with np.load(folder / "basin.npz") as table:
+        assert table["slice_points"].shape == (121, 2)
+        assert [r.split(",")[2] for r in rows[1:]] == table["slice_outcomes"].tolist()
+        assert table["fraction_starts"].shape == (fraction["samples"], 3)
+        converged = table["fraction_outcomes"] == "converged"
+        assert converged.mean() == pytest.approx(fraction["fraction"], abs=0)
+        assert table["grid_starts"].shape == (125, 3) and table["grid_outcomes"].shape == (125,)
+        assert table["plane_radii"].tolist() == plane["radii"]
 
 
 def test_kneed_cot_chains_from_both_ends_reach_the_minimum_the_cold_starts_miss(monkeypatch):

@@ -8,7 +8,8 @@
 Finds the gait (as ``gaitopt solve``), then :func:`gaitopt.basin.basin` (the star-shaped
 estimate: radii along ``--rays`` rays, in units of each coordinate's scale ``|x*_i|``) and
 :func:`gaitopt.basin.basin_fraction` (``--samples`` uniform starts in the box ``x* ± max-radius ·
-scale``, with the 95 % Wilson interval).  ``--out DIR`` writes basin.json and basin.png.
+scale``, with the 95 % Wilson interval).  ``--out DIR`` writes basin.json, basin.png and basin.npz
+(columnar: the sampled starts with their outcomes, the rays).
 Exit status 0 with a basin, 1 if no gait was found or the gait is unstable (empty basin).
 """
 
@@ -93,7 +94,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="ADDRESS",
         help="run the simulations on Dask: 'local' or a scheduler address (default: serial)",
     )
-    parser.add_argument("--out", metavar="DIR", help="write basin.json and basin.png there")
+    parser.add_argument(
+        "--out", metavar="DIR", help="write basin.json, basin.png and basin.npz there"
+    )
 
 
 def _axis_label(model: Any, name: str) -> str:
@@ -224,6 +227,18 @@ def run(args: argparse.Namespace) -> int:
         folder.mkdir(parents=True, exist_ok=True)
         write_json(summary, folder / "basin.json")
         save_figure(plot_basin(summary, model), folder / "basin.png")
+        import numpy as np
+
+        np.savez_compressed(  # columnar: every classified start with its outcome
+            folder / "basin.npz",
+            coordinates=np.array(model.section.coordinates),
+            fraction_starts=fraction.starts,
+            fraction_outcomes=fraction.outcomes.astype(str),
+            ray_coordinates=np.array(estimate.coordinates),
+            ray_directions=estimate.directions,
+            ray_radii=estimate.radii,
+            ray_first_failure=estimate.first_failure,
+        )
 
     error = write_outputs(args.out, write)
     if error:

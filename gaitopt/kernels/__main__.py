@@ -1,8 +1,9 @@
 """``python -m gaitopt.kernels --warm [--jobs N] [MODEL ...]``: compile (or find in the cache) the
-shooting kernels, the verification's DOP853 steps and, for a model with inputs, the optimiser's
-node kernels and flow Jacobians (:func:`gaitopt.optimize.collocation.warm_kernels`) of the built-in
-models, so that no later call waits for the compiler.  ``--jobs`` compiles that many models at
-once (default: the number of CPUs); the cache is safe for concurrent compiles."""
+shooting kernels, the verification's DOP853 steps, the batch simulation's functions and, for a
+model with inputs, the optimiser's node kernels and flow Jacobians
+(:func:`gaitopt.optimize.collocation.warm_kernels`) of the built-in models, so that no later call
+waits for the compiler.  ``--jobs`` compiles that many models at once (default: the number of
+CPUs); the cache is safe for concurrent compiles."""
 
 from __future__ import annotations
 
@@ -31,6 +32,9 @@ def _warm(name: str) -> tuple[str, str, float, float]:
     start, cpu = time.perf_counter(), _cpu()
     kern = model_kernels(REGISTRY[name])
     verification_steps(REGISTRY[name])  # the verification's DOP853 steps
+    from ..simulation.batch_events import compiled_functions
+
+    compiled_functions(REGISTRY[name])  # the batch simulation's guards, resets, locators
     if REGISTRY[name].inputs:  # the optimiser's node kernels and flow Jacobians
         from ..optimize.collocation import warm_kernels
 

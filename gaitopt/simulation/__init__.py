@@ -29,7 +29,15 @@ from .phase import PhaseFunctions, _Buffered, _rests_on_guard, integrate_phase
 from .result import Arc, Event, Simulation
 from .zeno import accumulation
 
-__all__ = ["simulate", "simulate_task", "Simulation", "Arc", "Event"]
+__all__ = ["simulate", "simulate_task", "simulate_batch", "Simulation", "Arc", "Event"]
+
+
+def simulate_batch(*args: Any, **kwargs: Any):
+    """Many starts simulated together: :func:`gaitopt.simulation.batch.simulate_batch`."""
+    from .batch import simulate_batch as run
+
+    return run(*args, **kwargs)
+
 
 #: SciPy's ``OdeSolver`` classes by name (``scipy.integrate`` is imported on first use: 0.4 s).
 _METHODS = ("DOP853", "RK45", "Radau", "LSODA")

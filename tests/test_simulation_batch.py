@@ -1,0 +1,142 @@
+"""The batch simulation (gaitopt.simulation.batch) against the per-start simulation
+(gaitopt.simulate, the referee): the same events (times, states, names) and the same outcome for
+every registered passive model's default start and perturbed starts, a Hypothesis property over
+compass-gait starts, the basin's classification both ways, and bad input.
+
+Tolerance of the event agreement: 1e-10 (s, and state units, relative to 1 + |x|).  Both run
+the same method (SciPy's DOP853 control and the same compiled step; Brent's method, the same
+iteration, on the same dense output), so most starts agree bit for bit; where a crossing's last
+bit differs, the error estimate of the next steps — at rtol 1e-11 a difference of nearly equal
+numbers — turns it into step sizes that differ in their 5th digit, and the results then differ
+at the integrator's tolerance (measured up to 2e-12 over 10 compass-gait steps)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import gaitopt
+from gaitopt.simulation.batch import simulate_batch
+
+TOL = 1e-10
+#: Models whose simulation takes seconds per start (the Strandbeest's linkage) are left to the
+#: slow run.
+_SLOW = {"strandbeest"}
+PASSIVE = sorted(n for n, c in gaitopt.REGISTRY.items() if c.passive_gait and n not in _SLOW)
+
+
+def _agree(model, starts: np.ndarray, steps: int) -> None:
+    """Every start's events and outcome agree between the batch and the per-start simulation."""
+    batch = simulate_batch(model, starts, steps=steps, record_events=True)
+    for i, start in enumerate(starts):
+        try:
+            ref = gaitopt.simulate(
+                model, dict(zip(model.section.coordinates, start, strict=True)), steps=steps
+            )
+        except gaitopt.GaitoptInputError:
+            assert batch.status[i] == "invalid start"
+            continue
+        assert batch.status[i] == ref.status, (i, ref.message, batch.message(i))
+        assert batch.steps[i] == ref.steps
+        events = batch.events_of(i)
+        assert [e[2] for e in events] == [e.transition for e in ref.events]
+        for mine, theirs in zip(events, ref.events, strict=True):
+            assert abs(mine[0] - theirs.t) <= TOL * (1 + abs(theirs.t))
+            assert mine[1] == theirs.phase
+            np.testing.assert_allclose(mine[3], theirs.state_before, rtol=TOL, atol=TOL)
+            if theirs.state_after is None:
+                assert mine[4] is None
+            else:
+                np.testing.assert_allclose(mine[4], theirs.state_after, rtol=TOL, atol=TOL)
+        if ref.status == "standing":
+            assert batch.accumulation_time[i] == pytest.approx(ref.accumulation_time, abs=1e-9)
+        n = ref.steps + 1
+        np.testing.assert_allclose(batch.section_states[i, :n], ref.section_states, rtol=TOL,
+                                   atol=TOL)  # fmt: skip
+
+
+@pytest.mark.parametrize("name", PASSIVE)
+def test_batch_events_agree_with_simulate_on_every_passive_model(name):
+    """Default start and five starts perturbed by up to 5 % (seeded), four returns each."""
+    model = gaitopt.model(name)
+    centre = model.section_vector(model.default_start())
+    rng = np.random.default_rng(1)
+    scale = np.where(np.abs(centre) > 0, np.abs(centre), 1.0)
+    starts = centre + 0.05 * scale * (2 * rng.random((5, centre.size)) - 1)
+    _agree(model, np.vstack([centre, starts]), steps=4)
+
+
+@pytest.fixture(scope="module")
+def compass():
+    return gaitopt.model("compass_gait")
+
+
+@settings(
+    max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(st.lists(st.floats(-0.3, 0.3), min_size=3, max_size=3))
+def test_batch_agrees_with_simulate_over_compass_starts(compass, offset):
+    """Hypothesis: any start within ±30 % of the default start (falls, trips, walking)."""
+    centre = compass.section_vector(compass.default_start())
+    start = centre * (1 + np.asarray(offset))
+    _agree(compass, np.vstack([start, centre]), steps=6)
+
+
+def test_basin_classification_batch_equals_per_start():
+    """gaitopt.basin's batch classification and its per-start rule give the same outcome for 24
+    seeded compass-gait starts in x* ± 30 % |x*| (converged, fell, not converged)."""
+    from gaitopt.basin import _classify, _classify_many, _model_of, _setup
+
+    gait = gaitopt.find_limit_cycle(gaitopt.model("compass_gait"))
+    setup = _setup(gait, 12, 3, 1e-4, None).__dict__
+    model = _model_of(setup)
+    rng = np.random.default_rng(3)
+    centre = np.asarray(setup["centre"])
+    starts = centre * (1 + 0.3 * (2 * rng.random((24, centre.size)) - 1))
+    per_start = [_classify(setup, model, s) for s in starts]
+    assert _classify_many(setup, model, starts) == per_start
+    assert len(set(per_start)) >= 2  # the sample is not all one outcome
+
+
+def test_invalid_rows_and_bad_input(compass):
+    """A row that is not a state (NaN) ends at once as "invalid start" while the others run; a
+    start of the wrong width or an input of the wrong size is one line naming the argument."""
+    centre = compass.section_vector(compass.default_start())
+    out = simulate_batch(compass, [centre, [np.nan, 1.0, 0.5]], steps=1)
+    assert out.status.tolist() == ["completed", "invalid start"]
+    with pytest.raises(gaitopt.GaitoptInputError, match="`starts`"):
+        simulate_batch(compass, [[1.0, 2.0]])
+    with pytest.raises(gaitopt.GaitoptInputError, match="`inputs`"):
+        simulate_batch(compass, [centre], inputs=[1.0, 2.0])
+
+
+def test_rays_in_lockstep_equal_rays_one_by_one():
+    """gaitopt.basin's 16 rays in a batch (the scans together, three halvings per round from
+    every midpoint they can visit) give exactly the radii, first failures and flags of the rays
+    bisected one by one with one simulation per start (no tolerance: the same midpoints, the
+    same classifications)."""
+    from gaitopt.basin import _directions, _rays_batch, _rays_task, _setup
+
+    gait = gaitopt.find_limit_cycle(gaitopt.model("compass_gait"))
+    setup = _setup(gait, 12, 3, 1e-4, None)
+    coordinates = ["stance", "stance_dot"]
+    points = [
+        setup.point(
+            directions=[d], coordinates=coordinates, scan=4, bisections=6, max_radius=0.3
+        )  # fmt: skip
+        for d in _directions(16, 2, 0).tolist()  # enough rays for batches (basin._SMALL)
+    ]
+    together = _rays_batch(points)
+    alone = [_rays_task(point) for point in points]
+    for a, b in zip(together, alone, strict=True):
+        (ray_a,), (ray_b,) = a["rays"], b["rays"]
+        assert ray_a["radius"] == ray_b["radius"]
+        assert ray_a["first_failure"] == ray_b["first_failure"]
+        assert ray_a["beyond"] == ray_b["beyond"]
+    assert any(r["rays"][0]["first_failure"] is not None for r in alone)  # something bisected
+    # the batch simulated every midpoint of its rounds (more starts than one by one): it did
+    # take several halvings per round
+    pairs = zip(together, alone, strict=True)
+    assert any(a["rays"][0]["runs"] > b["rays"][0]["runs"] for a, b in pairs)
