@@ -50,7 +50,7 @@ def _layout(model_cls) -> list[dict[str, list]]:
     transition has none): flow, events (guards, then constraints), admissibility, resets, the
     guards' first and second rates along the flow, the constraints' rates."""
     out = []
-    for phase in model_cls._structure().phases:
+    for phase in model_cls.structure().phases:
         rates = [rate_along(phase.flow, t.guard) for t in phase.transitions]
         out.append(
             {
