@@ -167,6 +167,12 @@ class OptimalGait:
         Wall-clock time (s).
     iterations : int
         IPOPT iterations of the final solve.
+    max_multiplier : float or None
+        The bound ``R`` on the spectral radius imposed in the NLP (``max_multiplier=``), else
+        None; :attr:`spectral_radius` is what the optimum reached.
+    max_roughness, roughness : float or None
+        With ``max_multiplier``: the bound on ``∫ Σ u̇² dt`` ((input unit)²/s) and the optimum's
+        value of it.
     """
 
     success: bool
@@ -196,6 +202,9 @@ class OptimalGait:
     iterations: int = 0
     problem: dict[str, Any] = field(default_factory=dict)
     orbit: list[Any] = field(default_factory=list)
+    max_multiplier: float | None = None
+    max_roughness: float | None = None
+    roughness: float | None = None
 
     def __bool__(self) -> bool:
         return self.success
@@ -203,6 +212,18 @@ class OptimalGait:
     def feedforward(self, t: float, step: int = 0) -> np.ndarray:
         """The optimal input at time ``t`` since the section of step ``step`` (held after)."""
         return self.profiles[step % len(self.profiles)](t)
+
+    @property
+    def spectral_radius(self) -> float | None:
+        """Largest multiplier modulus (AD), None without multipliers."""
+        mu = np.asarray(self.multipliers)
+        return float(np.max(np.abs(mu))) if mu.size else None
+
+    @property
+    def spectral_radius_fd(self) -> float | None:
+        """Largest multiplier modulus by finite differences of the simulated map, or None."""
+        mu = np.asarray(self.multipliers_fd)
+        return float(np.max(np.abs(mu))) if mu.size else None
 
     def to_json(self, *, minima: bool | None = None) -> dict[str, Any]:
         """The ``gaitopt optimize --json`` object (``minima`` and ``starts`` included when
@@ -222,6 +243,11 @@ class OptimalGait:
             "multipliers": [complex(m) for m in self.multipliers],  # [re, im] in JSON
             "multipliers_fd": [complex(m) for m in self.multipliers_fd],
             "stable": self.stable,
+            "spectral_radius": self.spectral_radius,
+            "spectral_radius_fd": self.spectral_radius_fd,
+            "max_multiplier": self.max_multiplier,
+            "max_roughness": self.max_roughness,
+            "roughness": self.roughness,
             "verified": self.verified,
             "verification": self.verification,
             "discretisation_error": self.discretisation_error,

@@ -70,6 +70,8 @@ def problem_from(data: Mapping[str, Any]) -> GaitProblem:
         clearance=float(data.get("clearance", 0.0)),
         guard_margin=float(data.get("guard_margin", 0.0)),
         continuous_inputs=bool(data.get("continuous_inputs", True)),
+        max_multiplier=data.get("max_multiplier"),
+        max_roughness=data.get("max_roughness"),
     )
 
 
