@@ -532,6 +532,16 @@ def _report_items(report: dict[str, Any], model: Any) -> list[Any]:
         ("discretisation error", "None" if error is None else f"{error:.2g} (relative)"),
         ("active constraints", ", ".join(report["active_constraints"]) or "none"),
     ]
+    if report.get("max_multiplier") is not None:  # --max-multiplier: the bound and its budget
+        rho, rho_fd = report.get("spectral_radius"), report.get("spectral_radius_fd")
+        items.append(
+            ("spectral radius", f"{_number(rho)} (finite differences {_number(rho_fd)}; bound "
+             f"{report['max_multiplier']:g})")
+        )  # fmt: skip
+        items.append(
+            ("roughness", f"{_number(report.get('roughness'))} (bound "
+             f"{_number(report.get('max_roughness'))}; ∫Σu̇² dt)")
+        )  # fmt: skip
     minima, starts = report.get("minima", []), report.get("starts", [])
     if minima or starts:
         items.append((f"minima ({len(minima)})", f"distinct, from {_count(starts, 'start')}"))
