@@ -45,8 +45,9 @@ slope=0``) with no ``--fix``, the least effort is standing still, no gait: exit 
 ``--max-multiplier R`` bounds the spectral radius of the optimum's return map inside the NLP
 (:func:`gaitopt.optimize_gait`'s ``max_multiplier``): the JSON then has ``max_multiplier``,
 ``max_roughness`` and ``roughness`` (the input profile's ``∫ Σ u̇² dt``, bounded by
-``--max-roughness S``, by default twice that of the optimum without the bound), besides
-``spectral_radius`` and ``spectral_radius_fd`` (AD and finite differences, always given); an
+``--max-roughness S``, by default twice that of the optimum without the bound) and
+``spectral_radius_fd_extrapolated`` (what the certificate checks), besides ``spectral_radius``
+and ``spectral_radius_fd`` (AD and plain finite differences, always given); an
 active bound is listed in ``active_constraints`` as ``spectral radius <= R``.  A model whose
 section has more than 4 coordinates, or a work cost, cannot take it (exit 2).
 

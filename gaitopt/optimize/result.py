@@ -173,6 +173,10 @@ class OptimalGait:
     max_roughness, roughness : float or None
         With ``max_multiplier``: the bound on ``∫ Σ u̇² dt`` ((input unit)²/s) and the optimum's
         value of it.
+    spectral_radius_fd_extrapolated : float or None
+        With ``max_multiplier``: the spectral radius by Richardson-extrapolated finite
+        differences of the simulated map, which the certificate checks against the bound
+        (:mod:`gaitopt.optimize.spectral_certify`).
     """
 
     success: bool
@@ -205,6 +209,7 @@ class OptimalGait:
     max_multiplier: float | None = None
     max_roughness: float | None = None
     roughness: float | None = None
+    spectral_radius_fd_extrapolated: float | None = None
 
     def __bool__(self) -> bool:
         return self.success
@@ -248,6 +253,7 @@ class OptimalGait:
             "max_multiplier": self.max_multiplier,
             "max_roughness": self.max_roughness,
             "roughness": self.roughness,
+            "spectral_radius_fd_extrapolated": self.spectral_radius_fd_extrapolated,
             "verified": self.verified,
             "verification": self.verification,
             "discretisation_error": self.discretisation_error,

@@ -35,7 +35,8 @@ from .collocation import Collocation, RadauMesh
 from .guess import check_warm_start
 from .problem import _WHY_STEPS, MAX_STEPS, GaitProblem, as_problem
 from .result import Minimum, OptimalGait, StartRecord
-from .spectral_bound import certify_spectral, with_roughness_budget
+from .spectral_bound import with_roughness_budget
+from .spectral_certify import certify_spectral
 from .starts import dask_starts
 
 __all__ = [
@@ -153,8 +154,9 @@ def optimize_gait(
         (:mod:`gaitopt.optimize.spectral`, :mod:`gaitopt.optimize.schur`).  ``R < 1`` asks
         for an open-loop stable optimum.  An inactive bound leaves the optimum unchanged; an
         active one is listed in ``active_constraints`` as ``spectral radius <= R``.  The
-        certificate checks the AD multipliers (to 1e-8) and those by finite differences of the
-        simulated map (to 1e-5) against ``R``.  Sections of at most 4 coordinates; least effort
+        certificate checks the AD multipliers (to 1e-8) and those by extrapolated finite
+        differences of the simulated map (to 1e-5) against ``R``
+        (:mod:`gaitopt.optimize.spectral_certify`).  Sections of at most 4 coordinates; least effort
         or a callable cost (not ``"work"``/``"cot"``).  Default: no bound.
     max_roughness : float, optional
         With ``max_multiplier``: bound on ``∫ Σᵣ u̇ᵣ² dt`` over the orbit ((input unit)²/s;

@@ -35,7 +35,7 @@ A Lyapunov certificate (``P = LLᵀ + εI``, ``R²P − AᵀPA = MMᵀ``) would 
 but adds ``m(m + 1)`` unknowns that are not unique where the bound is inactive (any feasible
 ``P`` will do), so the NLP's solution would not be isolated there; the exact test keeps every
 unknown determined by the orbit.  The certificate of the reported optimum is
-:func:`gaitopt.optimize.spectral_bound.certify_spectral`.
+:func:`gaitopt.optimize.spectral_certify.certify_spectral`.
 """
 
 from __future__ import annotations
