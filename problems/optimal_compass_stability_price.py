@@ -85,7 +85,8 @@ def main(argv: list[str] | None = None) -> int:
                  g.spectral_radius_fd, g.spectral_radius_fd_extrapolated, g.roughness,
                  g.success, g.discretisation_error, active, elapsed, g.message]
             )  # fmt: skip
-            points.append({"roughness_factor": factor, "max_multiplier": R, **g.to_json()})
+            report = {k: v for k, v in g.to_json().items() if k != "inputs"}  # profiles: large
+            points.append({"roughness_factor": factor, "max_multiplier": R, **report})
             print(f"S = {factor:g} S0, R = {R:.2f}: success {g.success}, effort {g.cost}, rho AD "
                   f"{g.spectral_radius}, FD {g.spectral_radius_fd_extrapolated}, {elapsed:.1f} s; "
                   f"{g.message[:100]}")  # fmt: skip
@@ -112,7 +113,7 @@ def main(argv: list[str] | None = None) -> int:
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(6, 6.5), sharex=True)
     for factor in sorted({r[0] for r in done}):
         mine = [r for r in done if r[0] == factor]
-        label = f"∫τ̇² dt ≤ {factor:g} × {roughness0:.4g} N²·m²/s"
+        label = rf"$\int\dot\tau^2\,dt \leq$ {factor:g} × {roughness0:.4g} N²·m²/s"
         ax1.plot([r[2] for r in mine], [r[3] for r in mine], "o-", label=label)
         ax2.plot([r[2] for r in mine], [r[5] for r in mine], "o-", label=f"AD, {factor:g}×")
         ax2.plot([r[2] for r in mine], [r[7] for r in mine], "kx", ms=7)
