@@ -6,7 +6,8 @@
                            [--fix step_length=M] [--fix speed=V] [--bound INPUT=MAX ...]
                            [--bound STATE=LOW:HIGH ...] [--constrain LIMIT ...]
                            [--free PARAM ...] [--steps K] [--starts N] [--seed S] [--tol TOL]
-                           [--scheduler ADDRESS] [--stabilise [--q Q] [--r R] [--orbits N]]
+                           [--max-multiplier R [--max-roughness S]] [--scheduler ADDRESS]
+                           [--stabilise [--q Q] [--r R] [--orbits N]]
                            [--library NAME=FIRST:LAST:COUNT [--cold K]] [--json] [--out DIR]
 
 ``--json`` prints one object: ``model``, ``params``, ``success``, ``message``, ``cost_kind``,
@@ -40,6 +41,15 @@ With ``--starts`` > 1 the JSON's ``starts`` lists every start's outcome (``conve
 minimum at index ``minimum``, ``not_converged`` or ``no_start``, with its ``message``): a start
 that cannot begin or fails is recorded and the search goes on.  On level ground (``--set
 slope=0``) with no ``--fix``, the least effort is standing still, no gait: exit 2 at once.
+
+``--max-multiplier R`` bounds the spectral radius of the optimum's return map inside the NLP
+(:func:`gaitopt.optimize_gait`'s ``max_multiplier``): the JSON then has ``max_multiplier``,
+``max_roughness`` and ``roughness`` (the input profile's ``∫ Σ u̇² dt``, bounded by
+``--max-roughness S``, by default twice that of the optimum without the bound) and
+``spectral_radius_fd_extrapolated`` (what the certificate checks), besides ``spectral_radius``
+and ``spectral_radius_fd`` (AD and plain finite differences, always given); an
+active bound is listed in ``active_constraints`` as ``spectral radius <= R``.  A model whose
+section has more than 4 coordinates, or a work cost, cannot take it (exit 2).
 
 ``--scheduler local`` (or a Dask address) runs the ``--starts`` on Dask
 (:func:`gaitopt.optimize.library.dask_starts`; the same minima as the serial run).
@@ -91,6 +101,24 @@ def _tolerance(text: str) -> float:
             f"expected a positive relative error, got {text!r}; e.g. --tol 1e-6"
         )
     return value
+
+
+def _bound_value(option: str, example: str) -> Any:
+    """An argparse ``type`` for ``--max-multiplier`` and ``--max-roughness``: a positive finite
+    number."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if not (math.isfinite(value) and value > 0):
+            raise argparse.ArgumentTypeError(
+                f"expected a positive finite number, got {text!r}; e.g. {option} {example}"
+            )
+        return value
+
+    return parse
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -170,6 +198,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "refinement, a positive number (default 1e-8)",
     )
     parser.add_argument(
+        "--max-multiplier",
+        type=_bound_value("--max-multiplier", "1"),
+        metavar="R",
+        help="bound the spectral radius of the return map's Jacobian, |multiplier| <= R, inside "
+        "the optimisation (R < 1: open-loop stable by design)",
+    )
+    parser.add_argument(
+        "--max-roughness",
+        type=_bound_value("--max-roughness", "120"),
+        metavar="S",
+        help="with --max-multiplier: bound on the integral of the squared input rates over the "
+        "orbit ((input unit)^2/s; default: twice that of the optimum without the bound)",
+    )
+    parser.add_argument(
         "--scheduler",
         type=_scheduler_address,
         default=None,
@@ -237,6 +279,16 @@ def _parse(args: argparse.Namespace, model: Any) -> dict[str, Any]:
             f"--constrain {paths[0]}: a --library does not take path constraints yet; "
             f"drop --constrain or --library"
         )
+    if args.max_roughness is not None and args.max_multiplier is None:
+        raise InputError(
+            f"--max-roughness {args.max_roughness:g} applies with --max-multiplier; add "
+            f"--max-multiplier 1 or drop --max-roughness"
+        )
+    if args.max_multiplier is not None and args.library is not None:
+        raise InputError(
+            f"--max-multiplier {args.max_multiplier:g}: a --library does not take the bound "
+            f"yet; drop --max-multiplier or --library"
+        )
     free = tuple(args.free or ())
     for name in free:
         if name not in model.params:
@@ -251,6 +303,8 @@ def _parse(args: argparse.Namespace, model: Any) -> dict[str, Any]:
         **({"path_constraints": paths} if paths else {}),
         "free": free,
         "tol": args.tol,
+        **({"max_multiplier": args.max_multiplier} if args.max_multiplier is not None else {}),
+        **({"max_roughness": args.max_roughness} if args.max_roughness is not None else {}),
     }
 
 
@@ -479,6 +533,16 @@ def _report_items(report: dict[str, Any], model: Any) -> list[Any]:
         ("discretisation error", "None" if error is None else f"{error:.2g} (relative)"),
         ("active constraints", ", ".join(report["active_constraints"]) or "none"),
     ]
+    if report.get("max_multiplier") is not None:  # --max-multiplier: the bound and its budget
+        rho, rho_fd = report.get("spectral_radius"), report.get("spectral_radius_fd")
+        items.append(
+            ("spectral radius", f"{_number(rho)} (finite differences {_number(rho_fd)}; bound "
+             f"{report['max_multiplier']:g})")
+        )  # fmt: skip
+        items.append(
+            ("roughness", f"{_number(report.get('roughness'))} (bound "
+             f"{_number(report.get('max_roughness'))}; ∫Σu̇² dt)")
+        )  # fmt: skip
     minima, starts = report.get("minima", []), report.get("starts", [])
     if minima or starts:
         items.append((f"minima ({len(minima)})", f"distinct, from {_count(starts, 'start')}"))

@@ -22,6 +22,9 @@ _CLI_ADVICE = (
     (r"path_constraints=\('(\w+)',\)", r"--constrain \1"),
     (r"`path_constraints`", "--constrain"),
     (r"`(cost|starts|seed|steps|tol|free|scheduler)`", r"--\1"),
+    (r"`?\bmax_(multiplier|roughness)`?=([\d.e+-]+)", r"--max-\1 \2"),
+    (r"`max_(multiplier|roughness)`", r"--max-\1"),
+    (r"\bmax_(multiplier|roughness)\b", r"--max-\1"),
 )
 
 

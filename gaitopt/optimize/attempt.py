@@ -18,6 +18,7 @@ from .guess import NoStart, _start_guess
 from .nodes import split_solver
 from .problem import GaitProblem
 from .result import OptimalGait
+from .spectral import fill_sensitivities
 
 __all__ = ["attempt"]
 
@@ -50,13 +51,15 @@ def _statement_key(problem: GaitProblem, values: bool = True) -> tuple:
     """Everything a transcription depends on: each field of the statement (the model by class
     and parameter values; a user's cost function by identity, so a new one never hits).  With
     ``values=False``, only whether the period, step length and speed are fixed, not their
-    values: they are bounds of the NLP's rows, so such statements share a compiled NLP."""
+    values: they are bounds of the NLP's rows (``max_multiplier``: of a fixed variable), so such
+    statements share a compiled NLP."""
     items = []
     for f in fields(problem):
         value = getattr(problem, f.name)
         if f.name == "model":
             value = (type(value), tuple(value.params.items()))
-        elif not values and f.name in ("period", "step_length", "speed"):
+        elif not values and f.name in ("period", "step_length", "speed", "max_multiplier",
+                                       "max_roughness"):  # fmt: skip
             value = value is not None
         elif callable(value):
             value = ("callable", id(value))
@@ -102,7 +105,7 @@ def _solver(col: Collocation) -> ca.Function:
 
 def _run(col: Collocation, w0: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, dict[str, Any]]:
     solver = _solver(col)
-    w0 = np.clip(w0, col.lbx, col.ubx)
+    w0 = fill_sensitivities(col, np.clip(w0, col.lbx, col.ubx), p)  # ρ(A) ≤ R's unknowns
     sol = solver(x0=w0, p=p, lbx=col.lbx, ubx=col.ubx, lbg=col.lbg, ubg=col.ubg)
     return np.asarray(sol["x"], dtype=float).ravel(), dict(solver.stats())
 

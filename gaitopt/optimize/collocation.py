@@ -75,6 +75,7 @@ from .radau import (
     _derivative_matrix,
     lagrange_matrix,
 )
+from .spectral import add_spectral_bound
 from .state_arcs import touch_rows
 
 __all__ = ["RadauMesh", "Collocation", "lagrange_matrix", "Group", "Arc", "warm_kernels"]
@@ -523,6 +524,12 @@ class Collocation:
                 J = positive_work
         else:
             J = ca.sum1(ca.vertcat(*cost_terms))
+        # ρ(A) ≤ R: the variational equations, A and the Schur–Cohn–Jury rows (spectral.py).
+        self.spectral = (
+            None
+            if problem.max_multiplier is None
+            else add_spectral_bound(self, B, add, X, U, T, Th, p, p_in)
+        )
         w = B.vector()
         self._w, self._p = w, p_in
         objective = J

@@ -46,6 +46,7 @@ import numpy as np
 from ..arguments import check_count
 from ..errors import GaitoptInputError, did_you_mean
 from ..hybrid import HybridModel
+from .spectral_bound import check_max_multiplier
 
 __all__ = ["GaitProblem", "COSTS", "cost_unit", "MAX_STEPS"]
 
@@ -193,6 +194,19 @@ class GaitProblem:
         map has different derivatives on either side and no Floquet multipliers; an actuator's
         torque cannot jump either.  Default True; it constrains only models with more than one
         phase per step.
+    max_multiplier : float or None
+        Bound ``R > 0`` on the spectral radius of the return map's Jacobian (its largest
+        multiplier modulus), ``ρ(A) ≤ R``, imposed inside the NLP
+        (:mod:`gaitopt.optimize.spectral`: the variational equations collocated with the orbit
+        and the Schur–Cohn–Jury conditions on ``A/R``'s characteristic polynomial); ``R < 1``
+        asks for an open-loop stable gait.  ``None`` (default): no bound.  Sections of at most
+        4 coordinates, least effort or a callable cost.
+    max_roughness : float or None
+        With ``max_multiplier``: bound ``S`` on the input profile's roughness ``∫ Σᵣ u̇ᵣ² dt``
+        over the orbit ((input unit)²/s; the inputs also continuous between mesh intervals),
+        without which the bound is met by a torque spike at impact and has no optimum
+        (:mod:`gaitopt.optimize.spectral_bound`).  ``None``: twice the roughness of the optimum
+        without the bound, solved first (:func:`gaitopt.optimize_gait`).
     """
 
     model: HybridModel
@@ -212,6 +226,8 @@ class GaitProblem:
     clearance: float = 0.0
     guard_margin: float = 0.0
     continuous_inputs: bool = True
+    max_multiplier: float | None = None
+    max_roughness: float | None = None
 
     def __post_init__(self) -> None:
         model = self.model
@@ -356,6 +372,9 @@ class GaitProblem:
                     f"transport are undefined; leave them free and use cost='effort'"
                 )
         self._check_not_standing()
+        bound, budget = check_max_multiplier(self)
+        object.__setattr__(self, "max_multiplier", bound)
+        object.__setattr__(self, "max_roughness", budget)
 
     def _check_not_standing(self) -> None:
         """A walker on level ground with nothing fixed has no optimal gait: gravity does no work
@@ -555,6 +574,8 @@ class GaitProblem:
             **({"guard_margin": self.guard_margin} if self.guard_margin else {}),
             **({"braking_effort": self.braking_effort} if self.braking_effort else {}),
             **({} if self.continuous_inputs else {"continuous_inputs": False}),
+            **({} if self.max_multiplier is None else {"max_multiplier": self.max_multiplier}),
+            **({} if self.max_roughness is None else {"max_roughness": self.max_roughness}),
         }
 
 

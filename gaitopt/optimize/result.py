@@ -187,6 +187,16 @@ class OptimalGait(Gait):
     active_spans : dict or None
         With state bounds or path constraints: the node-time spans where each is active
         (the CLI's JSON ``active_spans``); None without them.
+    max_multiplier : float or None
+        The bound ``R`` on the spectral radius imposed in the NLP (``max_multiplier=``), else
+        None; :attr:`spectral_radius` is what the optimum reached.
+    max_roughness, roughness : float or None
+        With ``max_multiplier``: the bound on ``∫ Σ u̇² dt`` ((input unit)²/s) and the optimum's
+        value of it.
+    spectral_radius_fd_extrapolated : float or None
+        With ``max_multiplier``: the spectral radius by Richardson-extrapolated finite
+        differences of the simulated map, which the certificate checks against the bound
+        (:mod:`gaitopt.optimize.spectral_certify`).
     """
 
     success: bool
@@ -219,6 +229,10 @@ class OptimalGait(Gait):
     status: str = ""
     transcription: Any = field(default=None, repr=False, compare=False)
     active_spans: dict[str, Any] | None = None
+    max_multiplier: float | None = None
+    max_roughness: float | None = None
+    roughness: float | None = None
+    spectral_radius_fd_extrapolated: float | None = None
 
     def __post_init__(self) -> None:
         if self.status and self.status not in STATUS:
@@ -238,6 +252,18 @@ class OptimalGait(Gait):
         """The optimal input at time ``t`` since the section of step ``step`` (held after)."""
         return self.profiles[step % len(self.profiles)](t)
 
+    @property
+    def spectral_radius(self) -> float | None:
+        """Largest multiplier modulus (AD), None without multipliers."""
+        mu = np.asarray(self.multipliers)
+        return float(np.max(np.abs(mu))) if mu.size else None
+
+    @property
+    def spectral_radius_fd(self) -> float | None:
+        """Largest multiplier modulus by finite differences of the simulated map, or None."""
+        mu = np.asarray(self.multipliers_fd)
+        return float(np.max(np.abs(mu))) if mu.size else None
+
     def to_json(self, *, minima: bool | None = None) -> dict[str, Any]:
         """The ``gaitopt optimize --json`` object (``minima`` and ``starts`` included when
         there are more starts than one, or when asked)."""
@@ -256,6 +282,12 @@ class OptimalGait(Gait):
             "multipliers": [complex(m) for m in self.multipliers],  # [re, im] in JSON
             "multipliers_fd": [complex(m) for m in self.multipliers_fd],
             "stable": self.stable,
+            "spectral_radius": self.spectral_radius,
+            "spectral_radius_fd": self.spectral_radius_fd,
+            "max_multiplier": self.max_multiplier,
+            "max_roughness": self.max_roughness,
+            "roughness": self.roughness,
+            "spectral_radius_fd_extrapolated": self.spectral_radius_fd_extrapolated,
             "verified": self.verified,
             "verification": self.verification,
             "discretisation_error": self.discretisation_error,

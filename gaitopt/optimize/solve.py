@@ -35,6 +35,8 @@ from .collocation import Collocation, RadauMesh
 from .guess import check_warm_start
 from .problem import _WHY_STEPS, MAX_STEPS, GaitProblem, as_problem
 from .result import Minimum, OptimalGait, StartRecord
+from .spectral_bound import with_roughness_budget
+from .spectral_certify import certify_spectral
 from .starts import dask_starts
 from .state_arcs import detect_touches
 
@@ -86,6 +88,8 @@ def optimize_gait(
     verify: bool = True,
     guess: OptimalGait | None = None,
     scheduler: str | None = None,
+    max_multiplier: float | None = None,
+    max_roughness: float | None = None,
 ) -> OptimalGait:
     """Synthesise the optimal gait of an actuated hybrid model.
 
@@ -140,6 +144,29 @@ def optimize_gait(
         Run the starts on Dask (``"local"``: a local cluster; or a scheduler address), as
         :func:`gaitopt.sweep.sweep` does (:func:`gaitopt.optimize.starts.dask_starts`); the
         minima and the refined optimum are those of the serial run.  Default: serially.
+    max_multiplier : float, optional
+        Bound ``R > 0`` on the spectral radius of the return map's Jacobian ``A`` (section
+        coordinates, the input a feedforward in the time since the section), imposed inside the
+        NLP: ``A`` from the variational equations collocated alongside the orbit (the same
+        Radau scheme, so exactly the implicit-function-theorem Jacobian of
+        :mod:`gaitopt.optimize.floquet`) with the saltation and reset Jacobians at every phase
+        end, and ``ρ(A) ≤ R`` as the ``m + 1`` Schur–Cohn–Jury conditions (bilinear
+        Liénard–Chipart form) on the characteristic polynomial of ``A/R``, smooth in ``A``
+        (:mod:`gaitopt.optimize.spectral`, :mod:`gaitopt.optimize.schur`).  ``R < 1`` asks
+        for an open-loop stable optimum.  An inactive bound leaves the optimum unchanged; an
+        active one is listed in ``active_constraints`` as ``spectral radius <= R``.  The
+        certificate checks the AD multipliers (to 1e-8) and those by extrapolated finite
+        differences of the simulated map (to 1e-5) against ``R``
+        (:mod:`gaitopt.optimize.spectral_certify`).  Sections of at most 4 coordinates; least effort
+        or a callable cost (not ``"work"``/``"cot"``).  Default: no bound.
+    max_roughness : float, optional
+        With ``max_multiplier``: bound on ``∫ Σᵣ u̇ᵣ² dt`` over the orbit ((input unit)²/s;
+        N²·m²/s for torques), the inputs also continuous between mesh intervals.  The Jacobian
+        depends on the input at each impact instant, which the effort does not charge, so
+        without it the bound is met by a torque spike at impact whose width shrinks with the
+        mesh, and no optimum exists (:mod:`gaitopt.optimize.spectral_bound`).  Default: twice
+        the roughness of the optimum without the bound, which is solved first and warm starts
+        the bounded one.
 
     Returns
     -------
@@ -151,7 +178,9 @@ def optimize_gait(
         Bad input, before any work: a count above its limit (``steps``, ``starts``, ``seed``,
         ``mesh``), a ``tol`` that is not a positive number, a statement with no optimum (level
         ground with nothing fixed: the least effort is standing still; positive work without
-        input bounds), a ``guess`` that cannot warm start
+        input bounds), a ``max_multiplier`` that is not a positive finite number or cannot
+        apply (a section of more than 4 coordinates, a work cost), a ``guess`` that cannot warm
+        start
         (:class:`~gaitopt.optimize.guess.WarmStartError`).
     """
     _check_counts(steps=steps, starts=starts, seed=seed, mesh=mesh, tol=tol, verify=verify)
@@ -167,6 +196,8 @@ def optimize_gait(
         path_constraints=path_constraints,
         free=free,
         steps=steps,
+        max_multiplier=max_multiplier,
+        max_roughness=max_roughness,
     )
     indices = _start_indices(starts)
     return solve_problem(
@@ -292,6 +323,15 @@ def solve_problem(
             f"serially (scheduler=None)"
         )
     check_warm_start(problem, guess)
+    # ρ(A) ≤ R needs a roughness budget: by default from the optimum without the bound.
+    problem, unbounded, failure = with_roughness_budget(
+        problem,
+        lambda q: solve_problem(q, starts=starts, seed=seed, mesh=mesh, tol=tol, verify=verify,
+                                guess=guess, scheduler=scheduler),
+    )  # fmt: skip
+    if failure is not None:
+        return failure
+    guess = guess if guess is not None else unbounded
     model = problem.model
     p = model.p
     mesh = mesh or DEFAULT_MESH
@@ -511,6 +551,7 @@ def _finish(
             f"Loosen `tol` to accept it, or bound the inputs so the optimum is smoother. "
             + result.message
         )
+    certify_spectral(col, w, result)  # ρ(A) ≤ R by AD and by finite differences, where asked
     return result
 
 

@@ -71,6 +71,8 @@ def problem_from(data: Mapping[str, Any]) -> GaitProblem:
         guard_margin=float(data.get("guard_margin", 0.0)),
         continuous_inputs=bool(data.get("continuous_inputs", True)),
         braking_effort=float(data.get("braking_effort", 0.0)),
+        max_multiplier=data.get("max_multiplier"),
+        max_roughness=data.get("max_roughness"),
     )
 
 
