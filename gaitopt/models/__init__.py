@@ -18,6 +18,7 @@ from .minimal_biped import MinimalBipedRun, MinimalBipedWalk
 from .one_d_hopper import OneDHopper
 from .planar_juggler import PlanarJuggler
 from .planar_quadruped import PlanarQuadruped, PlanarQuadrupedPronk
+from .planar_quadruped_raibert import PlanarQuadrupedRaibert
 from .raibert_hopper import RaibertHopper
 from .rimless_wheel import RimlessWheel
 from .simplest_walker import SimplestWalker
@@ -52,6 +53,7 @@ __all__ = [
     "PlanarJuggler",
     "PlanarQuadruped",
     "PlanarQuadrupedPronk",
+    "PlanarQuadrupedRaibert",
     "BallisticWalker",
     "RaibertHopper",
     "RimlessWheel",
@@ -84,6 +86,7 @@ REGISTRY: dict[str, type[HybridModel]] = {
         ThreeLinkWalker,
         PlanarQuadruped,
         PlanarQuadrupedPronk,
+        PlanarQuadrupedRaibert,
         BipedRunner,
         MinimalBipedWalk,
         MinimalBipedRun,
