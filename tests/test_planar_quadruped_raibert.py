@@ -235,3 +235,30 @@ def test_a_desired_speed_no_gait_reaches_is_an_honest_failure(capsys):
     report = json.loads(capsys.readouterr().out)
     assert code == 1 and report["success"] is False
     assert "desired_speed" in report["message"] and "ascent" in report["message"]
+
+
+def test_following_the_desired_speed_from_the_cli_ends_at_a_boundary(capsys):
+    # `gaitopt continue` in ẋ_d from the default gait (1 m/s) up to 8 m/s: every gait on the way
+    # is stable and there is no LP, PD or NS; the branch ends at a boundary located by
+    # bisection, ẋ_d = 7.160155 m/s (the first run's value, results/planar_quadruped_raibert_study;
+    # regression tolerance 1e-4 m/s), where the ascent's duration reaches zero (the front leg
+    # lifts off at the apex).  The last certified gait there is still stable, |λ| < 1.
+    code = main(
+        [
+            "continue",
+            "planar_quadruped_raibert",
+            "--param",
+            "desired_speed",
+            "--to",
+            "8",
+            "--no-cascade",
+            "--json",
+        ]
+    )
+    report = json.loads(capsys.readouterr().out)
+    assert code == 0, report["message"]
+    assert [sp["kind"] for sp in report["special_points"]] == ["boundary"]
+    edge = report["special_points"][0]
+    assert edge["param"] == pytest.approx(7.160155, abs=1e-4)
+    assert max(abs(complex(*z)) for z in edge["multipliers"]) < 1.0
+    assert all(point["stable"] for point in report["points"])
