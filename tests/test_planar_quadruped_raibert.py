@@ -262,3 +262,52 @@ def test_following_the_desired_speed_from_the_cli_ends_at_a_boundary(capsys):
     assert edge["param"] == pytest.approx(7.160155, abs=1e-4)
     assert max(abs(complex(*z)) for z in edge["multipliers"]) < 1.0
     assert all(point["stable"] for point in report["points"])
+
+
+def _hopper_twin(pronk):
+    """raibert_hopper with stiffness 2k, loss 2c and the pronk's mass, rest length, thrust,
+    desired speed and speed gain (its inertia and servo act only off the pitch-free set)."""
+    return gaitopt.model(
+        "raibert_hopper",
+        mass=pronk.mass,
+        rest_length=pronk.rest_length,
+        stiffness=2 * pronk.stiffness,
+        damping=2 * pronk.damping,
+        thrust=pronk.thrust,
+        desired_speed=pronk.desired_speed,
+        k_speed=pronk.k_speed,
+        gravity=pronk.gravity,
+    )
+
+
+@pytest.mark.parametrize("changes", [{}, {"desired_speed": 1.5, "thrust": 0.05}])
+def test_the_pitch_free_pronk_is_raibert_s_hopper_on_twice_the_spring(changes):
+    # Exact reduction (gaitopt/models/planar_quadruped_raibert_pronk.py): on φ = φ̇ = 0 the two
+    # legs' forces are equal, their moments cancel and the servo's torque is zero, so the COM
+    # obeys the Raibert hopper's stance equations with 2k and 2c, and the foot-placement law has
+    # the same T_s = π sqrt(m/(2k)).  Two independent computations (Cartesian Newton–Euler with
+    # both feet here, polar coordinates about the foot in raibert_hopper), each solved to 1e-10:
+    # apex z, ẋ and period agree to 1e-9, and the pronk's two multipliers (the pitch-free
+    # directions) are two of the hopper's four (its others are the pitch's), to 1e-8.
+    pronk = gaitopt.model("planar_quadruped_raibert_pronk", **changes)
+    quad = gaitopt.find_limit_cycle(pronk)
+    fp = quad.fixed_point
+    twin = gaitopt.find_limit_cycle(
+        _hopper_twin(pronk), {"z": fp["z"], "phi": 0.0, "x_dot": fp["x_dot"], "phi_dot": 0.0}
+    )
+    for cycle in (quad, twin):
+        assert cycle.success and cycle.verified, cycle.message
+    assert fp["z"] == pytest.approx(twin.fixed_point["z"], abs=1e-9)
+    assert fp["x_dot"] == pytest.approx(twin.fixed_point["x_dot"], abs=1e-9)
+    assert quad.period == pytest.approx(twin.period, abs=1e-9)
+    assert len(quad.multipliers) == 2
+    for lam in quad.multipliers:
+        assert np.min(np.abs(twin.multipliers - lam)) < 1e-8
+
+
+def test_the_default_pronk_is_stable():
+    # k_ẋ = 0.03 s, below the speed loop's period doubling (problems/planar_quadruped_raibert.py);
+    # both pitch-free multipliers inside the unit circle, one negative (the speed loop).
+    gait = gaitopt.find_limit_cycle(gaitopt.model("planar_quadruped_raibert_pronk"))
+    assert gait.success and gait.verified and gait.stable, gait.message
+    assert min(z.real for z in gait.multipliers) < 0

@@ -19,6 +19,7 @@ from .one_d_hopper import OneDHopper
 from .planar_juggler import PlanarJuggler
 from .planar_quadruped import PlanarQuadruped, PlanarQuadrupedPronk
 from .planar_quadruped_raibert import PlanarQuadrupedRaibert
+from .planar_quadruped_raibert_pronk import PlanarQuadrupedRaibertPronk
 from .raibert_hopper import RaibertHopper
 from .rimless_wheel import RimlessWheel
 from .simplest_walker import SimplestWalker
@@ -54,6 +55,7 @@ __all__ = [
     "PlanarQuadruped",
     "PlanarQuadrupedPronk",
     "PlanarQuadrupedRaibert",
+    "PlanarQuadrupedRaibertPronk",
     "BallisticWalker",
     "RaibertHopper",
     "RimlessWheel",
@@ -87,6 +89,7 @@ REGISTRY: dict[str, type[HybridModel]] = {
         PlanarQuadruped,
         PlanarQuadrupedPronk,
         PlanarQuadrupedRaibert,
+        PlanarQuadrupedRaibertPronk,
         BipedRunner,
         MinimalBipedWalk,
         MinimalBipedRun,

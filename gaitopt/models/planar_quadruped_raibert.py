@@ -77,14 +77,16 @@ def stance_time(s) -> float | ca.SX:
     return math.pi * sqrt(m_h / s.stiffness)
 
 
-def foot_placement(s, x_dot):
-    """Raibert's ``x_f = ẋ T_s/2 + k_ẋ (ẋ − ẋ_d)`` (m ahead of the hip)."""
-    return x_dot * stance_time(s) / 2 + s.k_speed * (x_dot - s.desired_speed)
+def foot_placement(s, x_dot, t_s=None):
+    """Raibert's ``x_f = ẋ T_s/2 + k_ẋ (ẋ − ẋ_d)`` (m ahead of the hip); ``T_s`` the bound's
+    :func:`stance_time` unless given."""
+    t_s = stance_time(s) if t_s is None else t_s
+    return x_dot * t_s / 2 + s.k_speed * (x_dot - s.desired_speed)
 
 
-def touchdown_angle_law(s, x_dot):
+def touchdown_angle_law(s, x_dot, t_s=None):
     """``θ_td = asin(x_f / l0)`` (rad, clipped to ±asin 0.95); on CasADi symbols or floats."""
-    ratio = foot_placement(s, x_dot) / s.rest_length
+    ratio = foot_placement(s, x_dot, t_s) / s.rest_length
     if isinstance(ratio, (ca.SX, ca.MX)):
         return ca.asin(ca.fmax(-_MAX_REACH, ca.fmin(_MAX_REACH, ratio)))
     return math.asin(max(-_MAX_REACH, min(_MAX_REACH, float(ratio))))
@@ -93,8 +95,8 @@ def touchdown_angle_law(s, x_dot):
 class _Legs:
     """The symbolic pieces of the controlled bound (built inside ``build``)."""
 
-    def __init__(self, sym: Symbols):
-        self.sym = sym
+    def __init__(self, sym: Symbols, t_s=None):
+        self.sym, self.t_s = sym, t_s  # t_s: the law's stance time (None: the bound's)
         self.m, self.I, self.L, self.g = sym.mass, sym.inertia, sym.half_length, sym.gravity
         self.l0, self.k, self.c, self.delta = (
             sym.rest_length,
@@ -117,15 +119,24 @@ class _Legs:
         """The attitude servo's torque on the body ``τ = −k_p φ − k_v φ̇`` (N m)."""
         return -self.sym.k_attitude * x[2] - self.sym.d_attitude * x[5]
 
-    def flow(self, x, hip, foot):
-        dx, dz, r, _, F = self.leg(hip, foot)
-        tau = self.torque(x)
-        # G = F d/r − (τ/r) n with n = (−d_z, d_x)/r (module docstring)
-        gx = F * dx / r + tau * dz / r**2
-        gz = F * dz / r - tau * dx / r**2
-        moment = (hip[0] - x[0]) * gz - (hip[1] - x[1]) * gx + tau
-        rates = [x[3], x[4], x[5], gx / self.m, gz / self.m - self.g, moment / self.I, 0]
-        return self.sym.function("flow", x, ca.vertcat(*rates))
+    def flow(self, x, stance):
+        """Newton–Euler with the stance legs ``[(hip, foot), ...]``; the servo's torque is
+        shared equally by them.  The feet (states after the six body states) stay put."""
+        tau = self.torque(x) / len(stance)
+        fx, fz, moment = 0, -self.m * self.g, 0
+        for hip, foot in stance:
+            dx, dz, r, _, F = self.leg(hip, foot)
+            # G = F d/r − (τ/r) n with n = (−d_z, d_x)/r (module docstring)
+            gx = F * dx / r + tau * dz / r**2
+            gz = F * dz / r - tau * dx / r**2
+            fx, fz = fx + gx, fz + gz
+            moment = moment + (hip[0] - x[0]) * gz - (hip[1] - x[1]) * gx + tau
+        rates = [x[3], x[4], x[5], fx / self.m, fz / self.m, moment / self.I]
+        return self.sym.function("flow", x, ca.vertcat(*rates, *([0] * len(stance))))
+
+    def ballistic(self, x):
+        """Flight: ẍ = 0, z̈ = −g, φ̈ = 0."""
+        return ballistic_flow(self.sym, x, self.g, vertical=1)
 
     def flight_energy(self, x):
         e = (
@@ -139,7 +150,7 @@ class _Legs:
         return hip[1] - self.l0 * ca.cos(angle)
 
     def angle(self, x):
-        return touchdown_angle_law(self.sym, x[3])
+        return touchdown_angle_law(self.sym, x[3], self.t_s)
 
     def touchdown(self, name, x, hip, target, doc):
         foot = hip[0] + self.l0 * ca.sin(self.angle(x))
@@ -282,18 +293,24 @@ class PlanarQuadrupedRaibert(_QuadrupedBase):
             f"{_MAX_REACH:g}·l0 of the hip, and the back leg must land first ({_RCB})"
         )
 
+    @staticmethod
+    def _stance_time(s):
+        """The law's expected stance time on symbols or values (the bound's virtual leg)."""
+        return stance_time(s)
+
     @property
     def expected_stance_time(self) -> float:
-        """``T_s = π sqrt(m_h/k)`` (s), the foot-placement law's stance time."""
-        return float(stance_time(self))
+        """``T_s`` (s), the foot-placement law's expected stance time (bound: ``π sqrt(m_h/k)``,
+        ``m_h = m I/(I + m L²)``)."""
+        return float(self._stance_time(self))
 
     def foot_placement(self, x_dot: float) -> float:
         """Raibert's ``x_f`` (m ahead of the hip at touchdown) at forward speed ``x_dot``."""
-        return float(foot_placement(self, x_dot))
+        return float(foot_placement(self, x_dot, self.expected_stance_time))
 
     def touchdown_angle(self, x_dot: float) -> float:
         """``θ_td = asin(x_f / l0)`` (rad from vertical, foot ahead of the hip)."""
-        return touchdown_angle_law(self, x_dot)
+        return touchdown_angle_law(self, x_dot, self.expected_stance_time)
 
     def default_start(self) -> dict[str, float]:
         """Near the (stable) controlled bound at the defaults: z = 0.38199 m, φ = 0.01420 rad,
@@ -306,15 +323,14 @@ class PlanarQuadrupedRaibert(_QuadrupedBase):
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
-        legs = _Legs(sym)
-        flight = ballistic_flow
+        legs = _Legs(sym, cls._stance_time(sym))
 
         def flight_phase(name, x, event, constraints=()):
             back, front = legs.hips(x)
             return Phase(
                 name,
                 _FLIGHT,
-                flight(sym, x, legs.g, vertical=1),
+                legs.ballistic(x),
                 (event, legs.falls(x, (back, front), f"a hip reaches the ground in {name}")),
                 {"energy": legs.flight_energy(x)},
                 points=legs.points(x),
@@ -348,7 +364,7 @@ class PlanarQuadrupedRaibert(_QuadrupedBase):
             return Phase(
                 name,
                 (*_FLIGHT, foot_name),
-                legs.flow(x, hip, x[6]),
+                legs.flow(x, [(hip, x[6])]),
                 (lift, legs.falls(x, (back, front), f"a hip reaches the ground in {name}")),
                 {},  # thrust, loss and hip work: nothing conserved
                 points=legs.points(x, **feet),
