@@ -14,12 +14,14 @@ multipliers 4.12 and 0.616 ± 0.866i).  This study asks:
   default bound's; the two gaits' multipliers are compared;
 * **how do the controlled bound's speed, period and multipliers follow the desired speed?**
   Pseudo-arclength continuation in ẋ_d from the default gait (ẋ_d = 1 m/s) both ways, with the
-  special points (LP, PD, NS, boundaries) the continuation reports.
+  special points (LP, PD, NS, boundaries) the continuation reports;
+* **the pronk** (`planar_quadruped_raibert_pronk`, pitch-free, = raibert_hopper on 2k and 2c):
+  its two multipliers continued in the speed gain k_ẋ, where the speed loop period-doubles.
 
     python problems/planar_quadruped_raibert.py --out results [--fast]
 
 Writes results/planar_quadruped_raibert_study/: speed.csv (one row a gait), branch.json/.csv (the
-continuation), summary.json and speed.png.
+continuation), pronk_k_speed.json/.csv, summary.json and speed.png.
 """
 
 from __future__ import annotations
@@ -234,8 +236,52 @@ def main(argv: list[str] | None = None) -> int:
     }
     write_json(summary, folder / "summary.json")
 
+    # -- the pronk against the speed gain -------------------------------------------------------
+    pronk_model = gaitopt.model("planar_quadruped_raibert_pronk")
+    pronk = gaitopt.find_limit_cycle(pronk_model)
+    if not (pronk.success and pronk.verified):
+        print(f"no pronk at the defaults: {pronk.message}")
+        return 1
+    k_bounds = (0.02, 0.05) if fast else (0.005, 0.12)
+    pronk_branch = gaitopt.continuation(
+        pronk_model,
+        "k_speed",
+        start=pronk,
+        to=k_bounds[1],
+        bounds=k_bounds,
+        both_directions=True,
+        cascade=False,
+        options=gaitopt.PseudoArclength(max_step=0.1 if fast else 0.02),
+    )
+    write_json(pronk_branch.as_dict(), folder / "pronk_k_speed.json")
+    write_csv(*pronk_branch.csv_rows(), folder / "pronk_k_speed.csv")
+    summary["pronk"] = {
+        "default": {
+            "k_speed_s": pronk_model.k_speed,
+            "z_m": float(pronk.fixed_point["z"]),
+            "speed_m_s": float(pronk.fixed_point["x_dot"]),
+            "period_s": pronk.period,
+            "multipliers": sorted(float(z.real) for z in pronk.multipliers),
+        },
+        "k_speed_range": [float(pronk_branch.params.min()), float(pronk_branch.params.max())],
+        "special_points": [
+            {
+                "kind": sp.kind,
+                "k_speed": float(sp.param),
+                "message": sp.message,
+                "multipliers": None
+                if sp.cycle is None
+                else sorted(float(z.real) for z in sp.cycle.multipliers),
+            }
+            for sp in pronk_branch.special_points
+        ],
+        "message": pronk_branch.message,
+    }
+    summary["elapsed_s"] = time.perf_counter() - t0
+    write_json(summary, folder / "summary.json")
+
     # -- figure ---------------------------------------------------------------------------------
-    fig, axes = plt.subplots(1, 4, figsize=(17, 4.2))
+    fig, axes = plt.subplots(1, 5, figsize=(21, 4.2))
     vd = table[:, 0]
     axes[0].plot(vd, table[:, 1], "k-", label="controlled bound")
     axes[0].plot(vd, vd, color="0.6", ls="--", label="ẋ = ẋ_d")
@@ -274,6 +320,21 @@ def main(argv: list[str] | None = None) -> int:
     ax.set_title(f"multipliers at {e_passive:g} J, {v_passive:.4g} m/s", fontsize=9)
     ax.legend(fontsize=7, loc="upper right")
     ax.grid(alpha=0.3)
+    ax = axes[4]
+    order_k = np.argsort(pronk_branch.params)
+    ks = pronk_branch.params[order_k]
+    lam = np.array([sorted(z.real for z in pronk_branch.cycles[i].multipliers) for i in order_k])
+    ax.plot(ks, lam[:, 0], "k.-", ms=3, label="λ (speed loop)")
+    ax.plot(ks, lam[:, 1], "b.-", ms=3, label="λ (height)")
+    ax.axhline(-1.0, color="0.3", ls="--", lw=0.9, label="λ = ±1")
+    ax.axhline(1.0, color="0.3", ls="--", lw=0.9)
+    for sp in pronk_branch.special_points:
+        ax.axvline(sp.param, color="r", lw=0.8, label=f"{sp.kind} at k_ẋ = {sp.param:.4g} s")
+    ax.set_xlabel("speed gain k_ẋ (s)")
+    ax.set_ylabel("pronk multiplier λ (1)")
+    ax.set_title("pronk (pitch-free), ẋ_d = 1 m/s", fontsize=9)
+    ax.legend(fontsize=7)
+    ax.grid(alpha=0.3)
     fig.tight_layout()
     save_figure(fig, folder / "speed.png")
 
@@ -290,7 +351,12 @@ def main(argv: list[str] | None = None) -> int:
         f"|λ|max {b['max_abs_multiplier_range']}, stable {b['stable_points']}/{b['points']}, "
         f"special {[(s['kind'], round(s['desired_speed'], 6)) for s in special]}; {b['message']}"
     )
-    print(f"wrote {folder} in {elapsed:.1f} s")
+    print(
+        f"pronk: default λ {summary['pronk']['default']['multipliers']}, k_ẋ "
+        f"{summary['pronk']['k_speed_range']}, special "
+        f"{[(s['kind'], round(s['k_speed'], 6)) for s in summary['pronk']['special_points']]}"
+    )
+    print(f"wrote {folder} in {summary['elapsed_s']:.1f} s")
     return 0
 
 

@@ -601,4 +601,10 @@ def test_planar_quadruped_raibert_study_the_controller_stabilises_the_bound(tmp_
     assert np.all(rows["speed_m_s"] < rows["desired_speed_m_s"])
     np.testing.assert_array_equal(rows["stable"], rows["max_abs_multiplier"] < 1.0)
     assert np.all(rows["stable"] == 1)
+    # The pronk's speed loop period-doubles in k_ẋ: one PD in [0.02, 0.05] s, located where the
+    # speed multiplier is −1 (the continuation's tolerance; checked to 1e-6), at the full
+    # run's k_ẋ = 0.041635 s (regression, 1e-5 s).
+    pd = [sp for sp in summary["pronk"]["special_points"] if sp["kind"] == "PD"]
+    assert len(pd) == 1 and pd[0]["k_speed"] == pytest.approx(0.041635, abs=1e-5)
+    assert pd[0]["multipliers"][0] == pytest.approx(-1.0, abs=1e-6)
     assert (folder / "speed.png").stat().st_size > 0
