@@ -244,7 +244,7 @@ class PlanarQuadrupedRaibert(_QuadrupedBase):
         1.0,
         unit="m/s",
         doc="desired forward speed ẋ_d of the foot-placement law",
-        source="chosen: Scout II bounds at about 1 m/s (Poulakakis et al. 2006)",
+        source="chosen: of the passive bounds' speeds, 0–1.12 m/s (problems/planar_quadruped.py)",
         low=-10.0,
         high=10.0,
     )
