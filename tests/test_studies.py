@@ -582,3 +582,38 @@ def test_planar_quadruped_study_pronk_and_bound_are_unstable_passive_gaits(tmp_p
     assert summary["bound_least_unstable"]["max_abs_multiplier"] == pytest.approx(min(moduli))
     assert summary["theta_scan"]["found"][0] < 0.21 < summary["theta_scan"]["found"][1]
     assert (folder / "branches.png").stat().st_size > 0
+
+
+def test_planar_quadruped_raibert_study_the_controller_stabilises_the_bound(tmp_path):
+    """problems/planar_quadruped_raibert.py --fast.  At the passive default bound's apex energy
+    (90 J) and speed (0.681691 m/s) the controlled bound is found by Newton on (ẋ_d, δ) to 1e-9
+    (checked here to 1e-8): every multiplier inside the unit circle, where the passive bound's
+    largest is 4.1217 (1e-4, as tests/test_planar_quadruped.py).  Along ẋ_d in [0.5, 1.5] m/s
+    every gait is stable and the speed rises with ẋ_d, below it (Raibert's ẋ T_s/2 overshoots the
+    neutral point); the table's `stable` column is |λ|max < 1."""
+    _run("planar_quadruped_raibert", tmp_path)
+    folder = tmp_path / "planar_quadruped_raibert_study"
+    summary = _load(folder, "summary.json")
+    match = summary["matched_to_passive"]
+    controlled, passive = match["controlled"], match["passive"]
+    assert controlled["apex_energy_J"] == pytest.approx(match["energy_J"], abs=1e-8)
+    assert controlled["speed_m_s"] == pytest.approx(match["speed_m_s"], abs=1e-8)
+    assert passive["abs_multipliers"][0] == pytest.approx(4.1217, abs=1e-4)
+    assert not passive["stable"]
+    assert controlled["verified"] and controlled["stable"]
+    assert max(controlled["abs_multipliers"]) < 1.0
+    rows = np.genfromtxt(folder / "speed.csv", delimiter=",", names=True)
+    assert len(rows) == summary["branch"]["points"] >= 5
+    assert rows["desired_speed_m_s"][0] == pytest.approx(0.5, abs=1e-9)
+    assert rows["desired_speed_m_s"][-1] == pytest.approx(1.5, abs=1e-9)
+    assert np.all(np.diff(rows["speed_m_s"]) > 0)
+    assert np.all(rows["speed_m_s"] < rows["desired_speed_m_s"])
+    np.testing.assert_array_equal(rows["stable"], rows["max_abs_multiplier"] < 1.0)
+    assert np.all(rows["stable"] == 1)
+    # The pronk's speed loop period-doubles in k_ẋ: one PD in [0.02, 0.05] s, located where the
+    # speed multiplier is −1 (the continuation's tolerance; checked to 1e-6), at the full
+    # run's k_ẋ = 0.041635 s (regression, 1e-5 s).
+    pd = [sp for sp in summary["pronk"]["special_points"] if sp["kind"] == "PD"]
+    assert len(pd) == 1 and pd[0]["k_speed"] == pytest.approx(0.041635, abs=1e-5)
+    assert pd[0]["multipliers"][0] == pytest.approx(-1.0, abs=1e-6)
+    assert (folder / "speed.png").stat().st_size > 0

@@ -18,6 +18,8 @@ from .minimal_biped import MinimalBipedRun, MinimalBipedWalk
 from .one_d_hopper import OneDHopper
 from .planar_juggler import PlanarJuggler
 from .planar_quadruped import PlanarQuadruped, PlanarQuadrupedPronk
+from .planar_quadruped_raibert import PlanarQuadrupedRaibert
+from .planar_quadruped_raibert_pronk import PlanarQuadrupedRaibertPronk
 from .raibert_hopper import RaibertHopper
 from .rimless_wheel import RimlessWheel
 from .simplest_walker import SimplestWalker
@@ -52,6 +54,8 @@ __all__ = [
     "PlanarJuggler",
     "PlanarQuadruped",
     "PlanarQuadrupedPronk",
+    "PlanarQuadrupedRaibert",
+    "PlanarQuadrupedRaibertPronk",
     "BallisticWalker",
     "RaibertHopper",
     "RimlessWheel",
@@ -84,6 +88,8 @@ REGISTRY: dict[str, type[HybridModel]] = {
         ThreeLinkWalker,
         PlanarQuadruped,
         PlanarQuadrupedPronk,
+        PlanarQuadrupedRaibert,
+        PlanarQuadrupedRaibertPronk,
         BipedRunner,
         MinimalBipedWalk,
         MinimalBipedRun,
