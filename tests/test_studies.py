@@ -617,3 +617,34 @@ def test_planar_quadruped_raibert_study_the_controller_stabilises_the_bound(tmp_
     assert len(pd) == 1 and pd[0]["k_speed"] == pytest.approx(0.041635, abs=1e-5)
     assert pd[0]["multipliers"][0] == pytest.approx(-1.0, abs=1e-6)
     assert (folder / "speed.png").stat().st_size > 0
+
+
+# -- biped runner ----------------------------------------------------------------------------------
+def test_biped_runner_study_symmetric_run_is_the_slip_and_the_limps_are_classified(tmp_path):
+    """problems/biped_runner.py --fast.  Exact: the symmetric run is the SLIP run twice (apex,
+    period = 2 T_SLIP, multiplier = λ_SLIP²; tolerance 1e-10 as tests/test_biped_runner.py).
+    The branch with leg B softer passes through the limp of tests/test_biped_runner.py (θ_b =
+    0.56 rad: apex heights 0.8757558 and 0.8763260 m, multiplier 0.43740420; 1e-6) and every
+    gait on it is a limp (classify); the equal-leg branch holds the symmetric run at θ_b = π/6
+    and its fold (LP) where the stable run meets the unstable one."""
+    folder = _run("biped_runner", tmp_path)
+    symmetric = _load(folder, "symmetric.json")
+    for row in symmetric:
+        assert row["apex_m"] == pytest.approx(row["slip_apex_m"], abs=1e-10)
+        assert row["period_s"] == pytest.approx(row["twice_slip_period_s"], abs=1e-10)
+        assert row["multiplier"] == pytest.approx(row["slip_multiplier_squared"], abs=1e-10)
+        assert row["verified"]
+    soft = np.genfromtxt(folder / "branch_soft_b.csv", delimiter=",", names=True, dtype=None,
+                         encoding="utf-8")  # fmt: skip
+    assert set(soft["gait"]) == {"limp"}
+    start = soft[np.abs(soft["touchdown_angle_b_rad"] - 0.56) < 1e-12]  # the branch's start
+    assert len(start) == 1
+    assert start["apex_a_m"][0] == pytest.approx(0.8757558, abs=1e-6)
+    assert start["apex_b_m"][0] == pytest.approx(0.8763260, abs=1e-6)
+    assert start["multiplier"][0] == pytest.approx(0.43740420, abs=1e-6)
+    assert start["stable"][0]
+    summary = _load(folder, "summary.json")
+    assert "LP" in {sp["kind"] for sp in summary["special_points"]["equal"]}
+    equal = np.genfromtxt(folder / "branch_equal.csv", delimiter=",", names=True, dtype=None,
+                          encoding="utf-8")  # fmt: skip
+    assert "symmetric run" in set(equal["gait"])
