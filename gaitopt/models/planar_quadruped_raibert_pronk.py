@@ -43,6 +43,7 @@ class PlanarQuadrupedRaibertPronk(PlanarQuadrupedRaibert):
 
     name = "planar_quadruped_raibert_pronk"
     title = "Planar quadruped pronking, Raibert's controller (one virtual leg)"
+    declared_states = _FLIGHT
     declared_coordinates = ("z", "x_dot")
     declared_section_doc = "pitch-free apex: z_dot = 0, x = 0, phi = phi_dot = 0"
 
