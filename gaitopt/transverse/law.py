@@ -42,12 +42,25 @@ class StageTable:
     sign: float
     duration: float
     value: object  # u*(τ)
+    breaks: np.ndarray = field(default_factory=lambda: np.zeros(0))  # where u* may jump
     K_spline: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def __post_init__(self) -> None:
         from scipy.interpolate import CubicSpline
 
-        self.K_spline = CubicSpline(self.taus, self.K, axis=0).c  # 4 × intervals × n_u × m
+        # one spline per piece between the input's breakpoints, where u̇* (so Π̇, A⊥ and the
+        # gains' slope) may jump: a spline across one would smear the kink over its neighbours
+        taus = self.taus
+        cuts = sorted({0, taus.size - 1, *np.searchsorted(taus, self.breaks).tolist()})
+        cuts = [c for c in cuts if 0 <= c < taus.size]
+        coeffs = np.zeros((4, taus.size - 1, *self.K.shape[1:]))
+        for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+            if b - a >= 2:
+                coeffs[:, a:b] = CubicSpline(taus[a : b + 1], self.K[a : b + 1], axis=0).c
+            elif b - a == 1:  # one interval: the straight line
+                coeffs[2, a] = (self.K[b] - self.K[a]) / (taus[b] - taus[a])
+                coeffs[3, a] = self.K[a]
+        self.K_spline = coeffs  # 4 × intervals × n_u × m
         self.keep = np.array([i for i in range(self.X.shape[1]) if i != self.axis])
 
     def locate(self, x: np.ndarray) -> tuple[float, np.ndarray, np.ndarray, int]:
@@ -72,7 +85,7 @@ class StageTable:
                 j -= 1
             while tau > taus[j + 1] and j < taus.size - 2:
                 j += 1
-            if abs(step) < 1e-11 * self.duration:
+            if abs(step) < 1e-13 * self.duration:
                 break
         xs, fs, _ = self._hermite(j, tau)
         return tau, xs, fs, j
@@ -207,7 +220,16 @@ class TransverseLaw:
                     K[i] = riccati.gain(k, t)
             tables.append(
                 StageTable(
-                    taus, X, F_right, F_left, K, frame.axis, frame.sign, stage.duration, stage.value
+                    taus,
+                    X,
+                    F_right,
+                    F_left,
+                    K,
+                    frame.axis,
+                    frame.sign,
+                    stage.duration,
+                    stage.value,
+                    stage.breaks,
                 )  # fmt: skip
             )
         law = cls(tables, len(orbit.model.phases), orbit.steps, np.asarray(low, float),
