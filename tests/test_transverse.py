@@ -135,3 +135,46 @@ def test_transverse_lqr_bad_input(cycles):
             transverse_lqr(gait, **kwargs)
     with pytest.raises(gaitopt.GaitoptInputError, match="no inputs"):
         transverse_lqr(cycles["rimless_wheel"])
+
+
+def _cli(*argv: str) -> int:
+    from gaitopt.cli import main
+
+    return main(list(argv))
+
+
+@pytest.mark.parametrize(
+    "argv, word",
+    [
+        (["--transverse", "--r", "0"], "--r 0"),
+        (["--transverse", "--q", "1,2"], "--q 1,2"),
+        (["--transverse", "--compare"], "--compare"),
+        ([], "--transverse"),
+    ],
+)
+def test_cli_stabilise_bad_input(capsys, argv, word):
+    assert _cli("stabilise", "compass_gait", *argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and word in err and "Traceback" not in err
+
+
+def test_cli_stabilise_model_without_inputs(capsys):
+    assert _cli("stabilise", "rimless_wheel", "--transverse") == 2
+    assert "no inputs" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_cli_stabilise_json(capsys):
+    import json
+
+    code = _cli(
+        "stabilise", "compass_gait", "--transverse", "--q", "10,5,1,0.5", "--r", "0.1",
+        "--orbits", "10", "--perturbation", "0.02", "--json",
+    )  # fmt: skip
+    data = json.loads(capsys.readouterr().out)
+    assert code == 0 and data["success"], data["message"]
+    assert data["gait"]["kind"] == "limit cycle"
+    assert len(data["gains"]) == 1 and len(data["gains"][0]["K"]) == 21
+    assert data["multiplier_gap"] < 1e-4 and not data["saturated"]
+    assert {"gait_s", "linearise_s", "riccati_s", "trials_s"} <= set(data["timings"])
+    assert all(t["converged"] for t in data["trials"])

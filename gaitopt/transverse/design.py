@@ -125,7 +125,10 @@ def simulate_law(gait: Any, law: TransverseLaw, x0: np.ndarray, steps: int, **op
     from ..simulation import simulate
 
     law.reset_record()
-    options = {"rtol": 1e-10, "atol": 1e-11, **options}
+    # a phase lasting three times its nominal stage has left the orbit's neighbourhood (a
+    # walker falling backwards never strikes): end it there, not after the simulator's 30 s
+    longest = max(t.duration for t in law.tables)
+    options = {"rtol": 1e-10, "atol": 1e-11, "max_phase_time": 3.0 * longest, **options}
     return simulate(gait.model, x0, steps=steps, feedback=law, **options)
 
 
