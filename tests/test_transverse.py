@@ -178,3 +178,45 @@ def test_cli_stabilise_json(capsys):
     assert data["multiplier_gap"] < 1e-4 and not data["saturated"]
     assert {"gait_s", "linearise_s", "riccati_s", "trials_s"} <= set(data["timings"])
     assert all(t["converged"] for t in data["trials"])
+
+
+def test_optimal_compass_gait_monodromy():
+    """The level-ground least-effort compass optimum (0.3 m in 0.8 s; open-loop multiplier
+    −1.34).  With its profile read on the clock (the feedforward its multipliers are of), the
+    transverse monodromy has the AD multipliers through the Radau collocation: measured 2e-7
+    apart, the collocation's own derivative accuracy at its discretisation error 1e-10 (its
+    finite-difference check agrees to 1e-6), so the tolerance is 1e-6.  Read on the phase,
+    ``u*(τ)`` (the transverse law's feedforward, a different map: −1.196), it agrees with
+    central differences (h = 1e-5) of the simulated map under that law with zero gain, to
+    their 1e-4."""
+    from gaitopt.transverse.design import measured_closed_loop
+    from gaitopt.transverse.law import TransverseLaw
+
+    gait = gaitopt.optimize_gait(
+        gaitopt.model("compass_gait", slope=0.0), "effort", period=0.8, step_length=0.3
+    )
+    assert gait.success
+    lin = transverse_linearisation(gait)
+    gap, rest = _match(gait.multipliers, lin.clock_multipliers)
+    assert gap < 1e-6 and len(rest) == 1 and abs(rest[0]) < 1e-9
+    law = TransverseLaw.build(lin, None, np.array([-np.inf]), np.array([np.inf]))
+    measured = np.linalg.eigvals(measured_closed_loop(gait, law))
+    gap, _ = _match(measured, lin.multipliers)
+    assert gap < 1e-4
+    assert abs(lin.multipliers[0]) > 1  # unstable either way
+
+
+def test_saturation_is_applied_and_counted(passive_lqr):
+    """With bounds of ±0.05 N·m the law clips its input and says so: the demanded peak exceeds
+    the bound, the applied one does not (to the bit), and the clipped calls are counted."""
+    from gaitopt.transverse.design import trial
+    from gaitopt.transverse.law import TransverseLaw
+
+    res = passive_lqr
+    law = TransverseLaw.build(res.linearisation, res.riccati, np.array([-0.05]), np.array([0.05]))
+    gait = res.gait
+    s_star = gait.model.section_coordinates_of(gait.x)
+    tr = trial(gait, law, s_star + np.array([0.0, 0.02, 0.0]), 2)
+    assert tr.status == "completed"
+    assert tr.saturated > 0 and tr.calls > tr.saturated
+    assert tr.peak_demanded[0] > 0.05 and tr.peak_applied[0] <= 0.05

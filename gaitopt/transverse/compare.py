@@ -3,7 +3,7 @@ largest perturbation survived along each section coordinate (both signs), peak i
 
 The largest survived perturbation along a direction is found by bisection on its size ``a``
 in ``(0, a_max]``: a start ``s* + a d`` survives if the controlled simulation completes its
-orbits and ends within ``min(1e-2 a, 1e-4)`` of the fixed point (section units, max norm).  Every
+orbits and ends within ``a / 10`` of the fixed point (section units, max norm).  Every
 start the bisection classifies is simulated (the classification *is* the simulation); the
 bisection assumes that the surviving sizes along a direction form an interval from 0 (the
 basin star-shaped along it), which it does not check between its probes.
@@ -91,11 +91,10 @@ def step_to_step_runner(gait: Any, gain: np.ndarray, orbits: int) -> Runner:
 
 
 def _survives(status: str, errors: list[float]) -> bool:
-    return (
-        status == "completed"
-        and len(errors) > 1
-        and errors[-1] <= min(1e-2 * max(errors[0], 1e-12), 1e-4)
-    )
+    """Completed every orbit and ended within a tenth of the start's distance: a criterion
+    that a slowly converging controller can meet in the same number of orbits as a fast one
+    (|λ| 0.69 after 12 orbits: 0.012)."""
+    return status == "completed" and len(errors) > 1 and errors[-1] <= 0.1 * errors[0]
 
 
 def survived(
