@@ -21,7 +21,7 @@ clock.  Three controllers on the same gait:
 For each: the closed-loop multipliers (the transverse monodromy's and the step map's), the
 largest perturbation survived along each section coordinate and sign (bisection up to 0.2
 section units, each probe simulated for ``orbits`` orbits: a survivor completes them and ends
-within a/10 of the fixed point; 12 orbits, 4 bisection steps after the probe at
+within a/10 of the fixed point; 12 orbits, 3 bisection steps after the probe at
 0.2) and the peak hip torque in those survivors' runs.
 
 Writes ``OUT/compass_transverse_lqr/``: ``comparison.json`` (everything), ``table.md`` (the
@@ -86,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
     folder = Path(args.out) / STUDY
     folder.mkdir(parents=True, exist_ok=True)
     orbits = 10 if args.fast else 12
-    iterations = 1 if args.fast else 4
+    iterations = 1 if args.fast else 3
     coordinates = ["stance_dot"] if args.fast else None
     timings: dict[str, float] = {}
 

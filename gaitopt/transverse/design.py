@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import GaitoptInputError
-from .law import TransverseLaw
+from .law import LawBudgetExceeded, TransverseLaw
 from .linearise import TransverseLinearisation, transverse_linearisation
 from .orbit import integrate_pieces
 from .result import TransverseLQR, TransverseTrial
@@ -165,11 +165,17 @@ def trial(gait: Any, law: TransverseLaw, s0: np.ndarray, orbits: int) -> Transve
     model = gait.model
     s_star = _section_point(gait)
     start = dict(zip(model.section.coordinates, map(float, s0), strict=True))
+    # about 1200 evaluations of the law per step near the orbit (compass gait, rtol 1e-9)
+    law.budget = 10_000 * orbits * law.steps
     try:
         x0 = model.lift(s0)
         sim = simulate_law(gait, law, x0, orbits * law.steps, rtol=1e-9, atol=1e-10)
     except StateError as exc:  # the start is not a state of the model (a foot below ground)
         return TransverseTrial(start, [float(np.max(np.abs(s0 - s_star)))], "no_start", str(exc))
+    except LawBudgetExceeded as exc:  # counted as not returning, with the reason
+        return TransverseTrial(start, [float(np.max(np.abs(s0 - s_star)))], "budget", str(exc))
+    finally:
+        law.budget = None
     states = sim.section_states[:: law.steps]
     errors = [float(np.max(np.abs(model.section_coordinates_of(x) - s_star))) for x in states]
     return TransverseTrial(

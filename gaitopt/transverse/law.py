@@ -24,7 +24,12 @@ import numpy as np
 from .linearise import TransverseLinearisation
 from .riccati import PeriodicRiccati
 
-__all__ = ["TransverseLaw", "StageTable"]
+__all__ = ["TransverseLaw", "StageTable", "LawBudgetExceeded"]
+
+
+class LawBudgetExceeded(RuntimeError):
+    """A simulation called the law more often than its :attr:`TransverseLaw.budget`."""
+
 
 _GRID = 240  # grid intervals per stage (and its extensions), at least
 
@@ -140,6 +145,8 @@ class TransverseLaw:
     outside : int
         Calls where the nearest orbit point was an end of a stage's extended orbit (the state
         is farther from the impact than the extension reaches).
+    budget : int or None
+        Most calls a run may make (:class:`LawBudgetExceeded` past it); None: no limit.
     """
 
     tables: list[StageTable]
@@ -153,6 +160,7 @@ class TransverseLaw:
     calls: int = 0
     saturated: int = 0
     outside: int = 0
+    budget: int | None = None
 
     def reset_record(self) -> None:
         """Forget the recorded peaks and counts (before a new run)."""
@@ -182,6 +190,11 @@ class TransverseLaw:
         if self.peak_demanded.size != u.size:
             self.reset_record()
         self.calls += 1
+        if self.budget is not None and self.calls > self.budget:
+            raise LawBudgetExceeded(
+                f"more than {self.budget} evaluations of the law: far from the orbit the nearest "
+                f"orbit phase jumps between distant points, and the integrator's steps collapse"
+            )
         if np.any(clipped != u):
             self.saturated += 1
         self.peak_demanded = np.maximum(self.peak_demanded, np.abs(u))

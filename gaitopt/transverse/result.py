@@ -31,7 +31,8 @@ class TransverseTrial:
         (section units).
     status, message : str
         The simulation's status (``"completed"``; ``"no_start"`` where the start is not a state
-        of the model) and message.
+        of the model; ``"budget"`` where the run needed more evaluations of the law than its
+        budget, far from the orbit) and message.
     peak_demanded, peak_applied : list of float
         Largest ``|u|`` per input the law computed, before and after clipping to the bounds.
     saturated, calls : int
