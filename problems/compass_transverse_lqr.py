@@ -24,11 +24,13 @@ section units, each probe simulated for ``orbits`` orbits: a survivor completes 
 within a/10 of the fixed point; 12 orbits, 3 bisection steps after the probe at
 0.2) and the peak hip torque in those survivors' runs.
 
-Writes ``OUT/compass_transverse_lqr/``: ``comparison.json`` (everything), ``table.md`` (the
-README's table), ``transverse.png`` (the gain along the step in state coordinates, and the
-error per step from one start for the open loop and each controller).  ``--fast``: one
-start for the transverse checks (stance_dot + 0.005), 10 orbits, one coordinate (stance_dot),
-one bisection step, no Drake-weights step-to-step row.
+Writes ``OUT/compass_transverse_lqr/``: ``comparison.json`` (everything; its
+``linearisation_checks``: the monodromy against the Floquet multipliers of the compass gait,
+kneed walker and SLIP, and the optimum), ``table.md`` (the README's table), ``transverse.png``
+(the gain along the step in state coordinates, and the error per step from one start for the
+open loop and each controller).  ``--fast``: one start for the transverse checks (stance_dot +
+0.005), 10 orbits, one coordinate (stance_dot), one bisection step, no Drake-weights
+step-to-step row, no linearisation checks.
 
 Usage::
 
@@ -78,6 +80,41 @@ def table(rows: list[dict], coordinates: list[str]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def linearisation_checks(optimum) -> list[dict]:
+    """The transverse monodromy's eigenvalues against each gait's Floquet multipliers (the
+    shooting's or the collocation's AD): the compass gait, the kneed walker (its state changes
+    dimension at the knee strike) and the SLIP at their defaults, and the optimum (its profile
+    on the clock, as its multipliers are)."""
+    from gaitopt.transverse import transverse_linearisation
+
+    rows = []
+    cases = [
+        (n, gaitopt.find_limit_cycle(gaitopt.model(n)))
+        for n in ("compass_gait", "kneed_walker", "slip")
+    ]
+    cases.append(("compass_gait optimum (clock)", optimum))
+    for name, gait in cases:
+        lin = transverse_linearisation(gait)
+        mu = lin.clock_multipliers if "clock" in name else lin.multipliers
+        rest = list(np.asarray(mu, complex))
+        gap = 0.0
+        for z in np.asarray(gait.multipliers, complex):
+            j = int(np.argmin([abs(z - y) for y in rest]))
+            gap = max(gap, abs(z - rest.pop(j)))
+        rows.append(
+            {
+                "gait": name,
+                "transverse_dimensions": lin.dimensions,
+                "floquet": [[z.real, z.imag] for z in np.asarray(gait.multipliers, complex)],
+                "monodromy": [[z.real, z.imag] for z in np.asarray(mu, complex)],
+                "largest_gap": gap,
+                "others": [[z.real, z.imag] for z in rest],
+            }
+        )
+        print(f"{name}: monodromy vs Floquet multipliers {gap:.2g}; others {rest}")
+    return rows
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", default="results", help="results folder")
@@ -99,6 +136,9 @@ def main(argv: list[str] | None = None) -> int:
         print(gait.message, file=sys.stderr)
         return 1
     print(f"optimum: cost {gait.cost:.10g}, multipliers {gait.multipliers}")
+    clock = time.perf_counter()
+    checks = [] if args.fast else linearisation_checks(gait)
+    timings["linearisation_checks_s"] = time.perf_counter() - clock
     clock = time.perf_counter()
     starts = [[0.0, 0.005, 0.0]] if args.fast else None
     tv = transverse_lqr(gait, Q=Q_DRAKE, R=R_DRAKE, orbits=orbits, starts=starts)
@@ -143,6 +183,7 @@ def main(argv: list[str] | None = None) -> int:
         "step_to_step": s2s.to_json(),
         "step_to_step_drake_weights": None if s2s_drake is None else s2s_drake.to_json(),
         "comparison": rows,
+        "linearisation_checks": checks,
         "orbits": orbits,
         "bisection_iterations": iterations,
         "a_max": 0.2,
