@@ -220,3 +220,20 @@ def test_saturation_is_applied_and_counted(passive_lqr):
     assert tr.status == "completed"
     assert tr.saturated > 0 and tr.calls > tr.saturated
     assert tr.peak_demanded[0] > 0.05 and tr.peak_applied[0] <= 0.05
+
+
+@pytest.mark.slow
+def test_transverse_lqr_on_the_kneed_walker(cycles):
+    """The kneed walker's state changes dimension at the knee strike (5 transverse states, then
+    3); its light shank makes the swing's Hamiltonian stiff (spectral radius ~1700 /s), which the
+    Riccati solution's sub-intervals keep well conditioned.  Hip and knee torques, Q = I, R = I:
+    the closed-loop monodromy against central differences of the simulated closed loop (1e-4),
+    and a perturbed walker returns."""
+    from gaitopt.transverse import transverse_lqr
+
+    res = transverse_lqr(cycles["kneed_walker"], Q=1, R=1, orbits=12, starts=[[0.01, 0, 0]])
+    assert res.success, res.message
+    assert res.multiplier_gap < 1e-4
+    # two of the five closed-loop eigenvalues are the 0s of the knee strike's rank drop
+    assert sum(abs(z) < 1e-9 for z in res.closed_loop_multipliers) == 2
+    assert np.max(np.abs(res.closed_loop_multipliers)) < np.max(np.abs(res.open_loop_multipliers))
