@@ -135,6 +135,14 @@ def run(args: argparse.Namespace) -> int:
         option = "--q" if str(exc).startswith("`Q`") else "--r"
         raise InputError(f"{option} {getattr(args, option[2:])}: {exc}") from None
     optimal = args.cost is not None or bool(args.fix) or bool(args.bound)
+    guess = parse_guess(model, args.guess)  # checked before any work, whichever gait
+    if optimal and args.guess:
+        raise InputError(
+            f"--guess {args.guess[0]}: a guess applies to the passive gait; drop it, or drop "
+            f"--cost/--fix/--bound"
+        )
+    if optimal:
+        options = _parse(args, model)
     if args.compare and not optimal:
         raise InputError(
             "--compare needs an optimum (step-to-step LQR acts on an optimum's offset); add "
@@ -144,10 +152,9 @@ def run(args: argparse.Namespace) -> int:
     try:
         with _solver_output_to_stderr():
             if optimal:
-                options = _parse(args, model)
                 gait = optimize_gait(model, args.cost or "effort", steps=args.steps, **options)
             else:
-                gait = find_limit_cycle(model, parse_guess(model, args.guess), steps=args.steps)
+                gait = find_limit_cycle(model, guess, steps=args.steps)
     except GaitoptInputError as exc:
         raise InputError(for_the_cli(str(exc))) from None
     gait_s = time.perf_counter() - clock
