@@ -648,3 +648,37 @@ def test_biped_runner_study_symmetric_run_is_the_slip_and_the_limps_are_classifi
     equal = np.genfromtxt(folder / "branch_equal.csv", delimiter=",", names=True, dtype=None,
                           encoding="utf-8")  # fmt: skip
     assert "symmetric run" in set(equal["gait"])
+
+
+@pytest.mark.slow
+def test_compass_transverse_lqr_study_fast_mode(tmp_path):
+    """The transverse-LQR study in its fast mode: both controllers stabilise the level compass
+    optimum (the script exits 0 only if transverse_lqr and stabilise succeed: closed-loop
+    monodromy and measured multipliers within 1e-4, the perturbed runs returning)."""
+    folder = _run("compass_transverse_lqr", tmp_path)
+    data = _load(folder, "comparison.json")
+    # the open-loop optimum is unstable (−1.34, the README's optimal-gait table)
+    assert max(abs(complex(*z)) for z in data["gait"]["multipliers"]) > 1.3
+    rows = {row["controller"].split(",")[0]: row for row in data["comparison"]}
+    assert rows["transverse LQR"]["largest_modulus"] < 1
+    assert rows["step-to-step LQR"]["largest_modulus"] < 1
+    # every probe of the bisection is a simulated start, classified: the largest survived size
+    # is one of them (or 0) and below the smallest failed one
+    for row in rows.values():
+        for s in row["survived"]:
+            sizes = [p[0] for p in s["probes"] if p[1]]
+            assert s["survived"] == (max(sizes) if sizes else 0.0)
+            assert s["failed"] is None or s["survived"] < s["failed"]
+    # the fast run's one transverse start (stance_dot + 0.005) returned in 10 orbits
+    assert data["transverse"]["trials"][0]["converged"]
+    assert (folder / "table.md").exists() and (folder / "transverse.png").exists()
+
+
+def test_readme_transverse_table_is_the_committed_study_output():
+    """The README's transverse-LQR table is results/compass_transverse_lqr/table.md (the full
+    run), line for line."""
+    readme = (PROBLEMS.parent / "README.md").read_text(encoding="utf-8")
+    table = (PROBLEMS.parent / "results" / "compass_transverse_lqr" / "table.md").read_text(
+        encoding="utf-8"
+    )
+    assert table.strip() in readme

@@ -15,6 +15,9 @@
                            [--max-step H] [--max-points N] [--bounds LOW:HIGH] [--out DIR] [--json]
     gaitopt basin MODEL [--set ...] [--guess ...] [--rays N] [--steps N] [--samples N]
                         [--max-radius R] [--scheduler ADDRESS] [--json] [--out DIR]
+    gaitopt stabilise MODEL --transverse [--set ...] [--guess ...] [--steps K] [--cost ...]
+                            [--fix ...] [--bound ...] [--q Q] [--r R] [--orbits N]
+                            [--perturbation A] [--survival K] [--compare] [--json]
 
 Exit status (docs/design.md, public contract): 0 gait found / simulation completed; 1 no gait found
 (the JSON is still printed, with ``success: false``) or the simulation did not complete; 2 bad
@@ -40,7 +43,7 @@ import warnings
 from collections.abc import Sequence
 
 from ..errors import GaitoptInputError
-from . import basin, continue_, control, linkage, list_, optimize, simulate, solve
+from . import basin, continue_, control, linkage, list_, optimize, simulate, solve, stabilise
 from .common import (
     EXIT_BAD_INPUT,
     EXIT_INTERRUPTED,
@@ -98,6 +101,7 @@ SUBCOMMANDS: dict[str, Subcommand] = {
     "linkage": Subcommand(linkage.HELP, linkage.add_arguments, linkage.run),
     "optimize": Subcommand(optimize.HELP, optimize.add_arguments, optimize.run),
     "basin": Subcommand(basin.HELP, basin.add_arguments, basin.run),
+    "stabilise": Subcommand(stabilise.HELP, stabilise.add_arguments, stabilise.run),
 }
 
 

@@ -43,6 +43,8 @@ def simulate_batch(*args: Any, **kwargs: Any):
 _METHODS = ("DOP853", "RK45", "Radau", "LSODA")
 
 InputPolicy = Callable[[int, np.ndarray], np.ndarray]
+#: ``feedback(t, x, phase, step) -> u``: a state-feedback input law (see :func:`simulate`).
+Feedback = Callable[[float, np.ndarray, int, int], np.ndarray]
 #: ``terrain(step) -> {parameter: value}``: parameters changed for one step (rough ground).
 Terrain = Callable[[int], Mapping[str, float]]
 
@@ -61,6 +63,7 @@ def simulate(
     terrain: Terrain | None = None,
     constraints: bool = True,
     feedforward: Callable[[float, int], np.ndarray] | None = None,
+    feedback: Feedback | None = None,
 ) -> Simulation:
     """Simulate a hybrid model for a number of steps.
 
@@ -107,6 +110,15 @@ def simulate(
         input may jump, e.g. a piecewise-polynomial profile's breakpoints) no integrator step
         crosses one (:func:`gaitopt.optimize.verify.feedforward_of` makes such a feedforward).
         A plain callable is called once per stage in Python (same events, same semantics).
+    feedback : callable, optional
+        ``feedback(t, x, phase, step) -> u``: a state feedback, ``t`` the time since the last
+        return to the section (s), ``x`` the state of phase ``phase`` and ``step`` the number of
+        returns so far (a transverse LQR's law, :mod:`gaitopt.transverse`).  Like a
+        feedforward it replaces ``inputs`` in the flow, the resets (evaluated at the state just
+        before the reset), the guards, admissibility rules and unilateral constraints, each of
+        which sees the input at its instant and state; each phase is integrated by SciPy's
+        stepper with the law called once per stage in Python.  Not with ``feedforward`` (a law
+        that needs one includes it).  :attr:`Arc.u` records the input at the arc's start.
 
     Returns
     -------
@@ -118,6 +130,11 @@ def simulate(
     from ..models import as_model
 
     model = as_model(model)
+    if feedback is not None and (feedforward is not None or not callable(feedback)):
+        raise GaitoptInputError(
+            "`feedback` must be a callable feedback(t, x, phase, step) -> u, and not given "
+            "with `feedforward` (include the feedforward in the law)"
+        )
     if method not in _METHODS:
         raise GaitoptInputError(f"`method` must be one of {', '.join(_METHODS)}, got {method!r}")
     steps = check_count(
@@ -163,8 +180,14 @@ def simulate(
         sec_x.append(x.copy())
     cycle_end = (len(model.phases) - 1, 0)  # (phase, transition) that closes a cycle
     while len(sec_t) - 1 < steps or (phase != 0 and steps > 0):
+        step_now = max(len(sec_t) - 1, 0)
+        if feedback is not None:  # the input at the phase start (for the start's checks)
+            u = np.asarray(feedback(t - (sec_t[-1] if sec_t else 0.0), x, phase, step_now),
+                           dtype=float).ravel()  # fmt: skip
         funcs = PhaseFunctions(model.phases[phase], u, p, constraints, type(model), phase)
-        if feedforward is not None:  # the flow gets its own input buffer, rewritten per call
+        if feedback is not None:
+            funcs._feedback = (feedback, sec_t[-1] if sec_t else 0.0, step_now, phase)
+        elif feedforward is not None:  # the flow gets its own input buffer, rewritten per call
             funcs._flow = _Buffered(model.phases[phase].flow, np.array(u, dtype=float), p)
             funcs._drive = (feedforward, sec_t[-1] if sec_t else 0.0, max(len(sec_t) - 1, 0))
         at_start = funcs.violated_at_start(x, t)
@@ -217,7 +240,9 @@ def simulate(
             sim.status = "fell"
             sim.message = f"{tr.name} at t = {t:.6g} s after {len(sec_t) - 1} steps"
             break
-        if feedforward is not None:  # the reset sees the input at the event
+        if feedback is not None:  # the reset sees the law's input at the state before it
+            u = funcs.feedback_input(t, x_minus)
+        elif feedforward is not None:  # the reset sees the input at the event
             u = np.asarray(feedforward(t - funcs._drive[1], funcs._drive[2]), dtype=float)
         x = np.asarray(tr.reset(x_minus, u, p), dtype=float).ravel()
         sim.events.append(Event(t, phase, tr.name, x_minus, x.copy()))

@@ -95,9 +95,24 @@ class PhaseFunctions:
         return len(self._guards)
 
     _drive = None  # (feedforward, section time, step) for a time-varying input
+    _feedback = None  # (feedback, section time, step, phase) for a state-feedback input
+    _last_feedback = None  # (t, x, u) of the last call
+
+    def feedback_input(self, t: float, x: np.ndarray) -> np.ndarray:
+        """The state feedback's input ``feedback(t − t_section, x, phase, step)`` at time ``t``
+        (s) and state ``x`` (input units)."""
+        last = self._last_feedback
+        if last is not None and last[0] == t and np.array_equal(last[1], x):
+            return last[2]  # the event functions at one instant and state share one call
+        feedback, t_section, step, phase = self._feedback
+        u = np.asarray(feedback(t - t_section, x, phase, step), dtype=float).ravel()
+        self._last_feedback = (t, np.array(x, dtype=float), u)
+        return u
 
     def rhs(self, t: float, x: np.ndarray) -> np.ndarray:
-        if self._drive is not None:  # feedforward u(t − t_section, step) in the flow
+        if self._feedback is not None:  # state feedback u(t − t_section, x, phase, step)
+            self._flow._u[:] = self.feedback_input(t, x)
+        elif self._drive is not None:  # feedforward u(t − t_section, step) in the flow
             feedforward, t_section, step = self._drive
             self._flow._u[:] = feedforward(t - t_section, step)
         return self._flow(x)
@@ -149,23 +164,31 @@ class PhaseFunctions:
             self._jac = self.phase.flow.factory("jac", ["x", "u", "p"], ["jac:flow:x"])
         return np.asarray(self._jac(x, self.u, self.p))
 
-    def at(self, t: float | None) -> None:
-        """Set the event functions' input to the feedforward's value at time ``t`` (s): guards,
-        admissibility and unilateral constraints see the input the flow sees (a stance foot's
-        normal force depends on the torque applied at that instant).  No-op without one."""
-        if self._drive is None or t is None:
+    def at(self, t: float | None, x: np.ndarray | None = None) -> None:
+        """Set the event functions' input to the feedforward's value at time ``t`` (s), or the
+        state feedback's at ``t`` and state ``x``: guards, admissibility and unilateral
+        constraints see the input the flow sees (a stance foot's normal force depends on the
+        torque applied at that instant).  No-op without either."""
+        if t is None:
             return
-        feedforward, t_section, step = self._drive
-        u = feedforward(t - t_section, step)
+        if self._feedback is not None:
+            if x is None:
+                return
+            u = self.feedback_input(t, x)
+        elif self._drive is not None:
+            feedforward, t_section, step = self._drive
+            u = feedforward(t - t_section, step)
+        else:
+            return
         for f in (*self._guards, *(a for a in self._admissible if a is not None)):
             f._u[:] = u
 
     def signed_guard(self, k: int, x: np.ndarray, t: float | None = None) -> float:
-        self.at(t)
+        self.at(t, x)
         return self._directions[k] * float(self._guards[k](x)[0])
 
     def admissible(self, k: int, x: np.ndarray, t: float | None = None) -> bool:
-        self.at(t)
+        self.at(t, x)
         n_tr = len(self.phase.transitions)
         if k >= n_tr and self.constraints[k - n_tr].at_end:
             # A constraint that vanishes where the phase ends (a foot touching down) reaches 0
@@ -178,8 +201,9 @@ class PhaseFunctions:
         """A constraint that fails where the phase begins (at time ``t``): one that starts active
         (``at_start``) and does not rise (a trailing foot that does not lift off), or one already
         negative."""
-        self.at(t)
-        u = self._guards[0]._u if self._drive is not None else self.u
+        self.at(t, x)
+        varying = self._drive is not None or self._feedback is not None
+        u = self._guards[0]._u if varying else self.u
         n_tr = len(self.phase.transitions)
         for j, c in enumerate(self.constraints):
             value = float(self._guards[n_tr + j](x)[0])
@@ -323,7 +347,11 @@ def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_t
 
     n_tr = funcs.events
     drive = funcs.vectorised_drive()  # a feedforward evaluated at a step's times at once
-    if method == "DOP853" and (funcs._drive is None or drive is not None):
+    if (
+        method == "DOP853"
+        and funcs._feedback is None
+        and (funcs._drive is None or drive is not None)
+    ):
         # one CasADi call per step (same method); with a feedforward, its values at the step's
         # stage times and check points are the call's input
         from ..dop853 import CompiledDOP853

@@ -1,0 +1,167 @@
+"""Transverse LQR against step-to-step LQR on the same optimal gait: closed-loop multipliers, the
+largest perturbation survived along each section coordinate (both signs), peak input.
+
+The largest survived perturbation along a direction is found by bisection on its size ``a``
+in ``(0, a_max]``: a start ``s* + a d`` survives if the controlled simulation completes its
+orbits and ends within ``a / 10`` of the fixed point (section units, max norm).  Every
+start the bisection classifies is simulated (the classification *is* the simulation); the
+bisection assumes that the surviving sizes along a direction form an interval from 0 (the
+basin star-shaped along it), which it does not check between its probes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..optimize.stabilisation.closed_loop import dense_check, run
+from .design import trial
+
+__all__ = ["Survival", "survived", "compare", "transverse_runner", "step_to_step_runner"]
+
+Runner = Callable[[np.ndarray], tuple[bool, list[float], str]]
+
+
+@dataclass
+class Survival:
+    """The largest survived perturbation along one signed section direction.
+
+    Attributes
+    ----------
+    coordinate : str
+        The section coordinate displaced.
+    sign : float
+        +1 or −1.
+    survived : float
+        Largest size found to survive (section units); 0 if none did.
+    failed : float or None
+        Smallest size found to fail (None: ``a_max`` survived, the search was capped).
+    probes : list of tuple
+        ``(size, survived, message)`` of every simulated start, in order.
+    peak : list of float
+        Largest ``|u|`` per input in the run from the largest survived size.
+    """
+
+    coordinate: str
+    sign: float
+    survived: float = 0.0
+    failed: float | None = None
+    probes: list[tuple[float, bool, str]] = field(default_factory=list)
+    peak: list[float] = field(default_factory=list)
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "coordinate": self.coordinate,
+            "sign": self.sign,
+            "survived": self.survived,
+            "failed": self.failed,
+            "capped": self.failed is None,
+            "probes": [list(p) for p in self.probes],
+            "peak_input": self.peak,
+        }
+
+
+def transverse_runner(gait: Any, law: Any, orbits: int) -> Runner:
+    """``runner(s0) -> (survived, peak |u|, message)`` for a transverse law."""
+
+    def runner(s0: np.ndarray) -> tuple[bool, list[float], str]:
+        tr = trial(gait, law, s0, orbits)
+        return _survives(tr.status, tr.errors), list(tr.peak_applied), tr.message
+
+    return runner
+
+
+def step_to_step_runner(gait: Any, gain: np.ndarray, orbits: int) -> Runner:
+    """``runner(s0) -> (survived, peak |u|, message)`` for the per-step offset law
+    ``δₖ = −K (sₖ − s*)`` of :func:`gaitopt.optimize.stabilise`."""
+    from ..errors import StateError
+
+    def runner(s0: np.ndarray) -> tuple[bool, list[float], str]:
+        try:
+            sim, offsets, errors = run(gait, s0, gain, orbits)
+        except StateError as exc:
+            return False, [], str(exc)
+        _, peak = dense_check(gait, sim, offsets) if sim.arcs else (None, np.zeros(0))
+        return _survives(sim.status, errors), peak.tolist(), sim.message
+
+    return runner
+
+
+def _survives(status: str, errors: list[float]) -> bool:
+    """Completed every orbit and ended within a tenth of the start's distance: a criterion
+    that a slowly converging controller can meet in the same number of orbits as a fast one
+    (|λ| 0.69 after 12 orbits: 0.012)."""
+    return status == "completed" and len(errors) > 1 and errors[-1] <= 0.1 * errors[0]
+
+
+def survived(
+    runner: Runner,
+    s_star: np.ndarray,
+    coordinate: int,
+    name: str,
+    sign: float,
+    a_max: float,
+    iterations: int,
+) -> Survival:
+    """Bisection for the largest surviving size along ``sign · e_coordinate``."""
+    result = Survival(name, sign)
+    direction = np.zeros(s_star.size)
+    direction[coordinate] = sign
+
+    def probe(a: float) -> bool:
+        ok, peak, message = runner(s_star + a * direction)
+        result.probes.append((float(a), bool(ok), message))
+        if ok and a >= result.survived:
+            result.survived, result.peak = float(a), peak
+        return ok
+
+    if probe(a_max):
+        return result
+    lo, hi = 0.0, a_max
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        if probe(mid):
+            lo = mid
+        else:
+            hi = mid
+    result.failed = hi
+    return result
+
+
+def compare(
+    gait: Any,
+    controllers: dict[str, tuple[Runner, np.ndarray]],
+    *,
+    a_max: float = 0.2,
+    iterations: int = 6,
+    coordinates: Sequence[str] | None = None,
+) -> list[dict[str, Any]]:
+    """One row per controller: its closed-loop multipliers (given), the largest survived
+    perturbation along each section coordinate and sign, the peak input over those runs."""
+    model = gait.model
+    s_star = np.asarray(model.section_coordinates_of(model.state_vector(gait.fixed_point)))
+    names = list(model.section.coordinates)
+    chosen = names if coordinates is None else list(coordinates)
+    rows = []
+    for label, (runner, multipliers) in controllers.items():
+        survivals = [
+            survived(runner, s_star, names.index(c), c, sign, a_max, iterations)
+            for c in chosen
+            for sign in (1.0, -1.0)
+        ]
+        peaks = [s.peak for s in survivals if s.peak]
+        rows.append(
+            {
+                "controller": label,
+                "closed_loop_multipliers": [
+                    [float(np.real(z)), float(np.imag(z))] for z in np.asarray(multipliers, complex)
+                ],
+                "largest_modulus": float(np.max(np.abs(multipliers))) if len(multipliers) else None,
+                "survived": [s.to_json() for s in survivals],
+                "peak_input": np.max(np.array(peaks), axis=0).tolist() if peaks else [],
+            }
+        )
+    return rows
