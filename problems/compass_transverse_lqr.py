@@ -50,7 +50,13 @@ import gaitopt
 from gaitopt.files import write_json
 from gaitopt.optimize import stabilise
 from gaitopt.transverse import transverse_lqr
-from gaitopt.transverse.compare import compare, step_to_step_runner, transverse_runner
+from gaitopt.transverse.compare import (
+    basin_rays,
+    compare,
+    sphere_directions,
+    step_to_step_runner,
+    transverse_runner,
+)
 from gaitopt.transverse.design import trial
 
 STUDY = "compass_transverse_lqr"
@@ -169,6 +175,36 @@ def main(argv: list[str] | None = None) -> int:
     clock = time.perf_counter()
     rows = compare(gait, controllers, a_max=0.2, iterations=iterations, coordinates=coordinates)
     timings["survival_s"] = time.perf_counter() - clock
+    # Basins of both closed loops on the section: rays spread over the sphere (section units),
+    # each bisected with every probe simulated (a star-shaped inner estimate).
+    clock = time.perf_counter()
+    directions = sphere_directions(2 if args.fast else 16, len(gait.model.section.coordinates))
+    basins = basin_rays(
+        gait,
+        {label: runner for label, (runner, _) in list(controllers.items())[:2]},
+        directions,
+        a_max=0.2,
+        iterations=iterations,
+    )
+    timings["basin_rays_s"] = time.perf_counter() - clock
+    basin_rows = []
+    for label, rays in basins.items():
+        radii = np.array([r["survived"] for r in rays])
+        basin_rows.append(
+            {
+                "controller": label,
+                "rays": len(rays),
+                "smallest_radius": float(radii.min()),
+                "median_radius": float(np.median(radii)),
+                "largest_radius": float(radii.max()),
+                "capped_rays": int(sum(r["capped"] for r in rays)),
+                "probes": int(sum(len(r["probes"]) for r in rays)),
+            }
+        )
+        print(
+            f"basin of {label}: radius {radii.min():.4g} to {radii.max():.4g} "
+            f"(median {np.median(radii):.4g}) over {len(rays)} rays"
+        )
     names = coordinates or list(gait.model.section.coordinates)
     text = table(rows, names)
     print(text)
@@ -183,6 +219,7 @@ def main(argv: list[str] | None = None) -> int:
         "step_to_step": s2s.to_json(),
         "step_to_step_drake_weights": None if s2s_drake is None else s2s_drake.to_json(),
         "comparison": rows,
+        "basins": {"directions": directions.tolist(), "rays": basins, "summary": basin_rows},
         "linearisation_checks": checks,
         "orbits": orbits,
         "bisection_iterations": iterations,

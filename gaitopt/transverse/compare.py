@@ -20,7 +20,16 @@ import numpy as np
 from ..optimize.stabilisation.closed_loop import dense_check, run
 from .design import trial
 
-__all__ = ["Survival", "survived", "compare", "transverse_runner", "step_to_step_runner"]
+__all__ = [
+    "Survival",
+    "survived",
+    "survived_along",
+    "compare",
+    "basin_rays",
+    "sphere_directions",
+    "transverse_runner",
+    "step_to_step_runner",
+]
 
 Runner = Callable[[np.ndarray], tuple[bool, list[float], str]]
 
@@ -107,9 +116,22 @@ def survived(
     iterations: int,
 ) -> Survival:
     """Bisection for the largest surviving size along ``sign · e_coordinate``."""
-    result = Survival(name, sign)
     direction = np.zeros(s_star.size)
     direction[coordinate] = sign
+    return survived_along(runner, s_star, direction, Survival(name, sign), a_max, iterations)
+
+
+def survived_along(
+    runner: Runner,
+    s_star: np.ndarray,
+    direction: np.ndarray,
+    result: Survival,
+    a_max: float,
+    iterations: int,
+) -> Survival:
+    """Bisection for the largest surviving size ``a`` of ``s* + a · direction`` (section units),
+    recorded in ``result``; every classified start is simulated by ``runner``."""
+    direction = np.asarray(direction, dtype=float)
 
     def probe(a: float) -> bool:
         ok, peak, message = runner(s_star + a * direction)
@@ -129,6 +151,42 @@ def survived(
             hi = mid
     result.failed = hi
     return result
+
+
+def sphere_directions(count: int, dimension: int) -> np.ndarray:
+    """``count`` unit directions spread over the sphere of ``dimension`` (section units):
+    a Fibonacci lattice in 3-D (deterministic), ± the axes in other dimensions."""
+    if dimension != 3:
+        eye = np.eye(dimension)
+        return np.vstack([eye, -eye])[:count]
+    k = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * k / count
+    phi = np.pi * (1.0 + 5.0**0.5) * k
+    r = np.sqrt(1.0 - z**2)
+    return np.column_stack([r * np.cos(phi), r * np.sin(phi), z])
+
+
+def basin_rays(
+    gait: Any,
+    controllers: dict[str, Runner],
+    directions: np.ndarray,
+    *,
+    a_max: float = 0.2,
+    iterations: int = 3,
+) -> dict[str, list[dict[str, Any]]]:
+    """A star-shaped inner estimate of each closed loop's basin on the section: the largest
+    surviving size along each of ``directions`` (bisection, every probe simulated; the same
+    assumption as :func:`survived`: surviving sizes form an interval from 0 along a ray)."""
+    model = gait.model
+    s_star = np.asarray(model.section_coordinates_of(model.state_vector(gait.fixed_point)))
+    out: dict[str, list[dict[str, Any]]] = {}
+    for label, runner in controllers.items():
+        rays = []
+        for i, d in enumerate(np.asarray(directions, dtype=float)):
+            result = survived_along(runner, s_star, d, Survival(f"ray {i}", 1.0), a_max, iterations)
+            rays.append({"direction": d.tolist(), **result.to_json()})
+        out[label] = rays
+    return out
 
 
 def compare(
