@@ -13,9 +13,11 @@ import numpy as np
 import pytest
 
 import gaitopt
+import gaitopt.optimize.solve as solve
 from gaitopt.optimize import optimize_gait
-from gaitopt.optimize.arcs import describe_bounds
-from gaitopt.optimize.collocation import lagrange_matrix
+from gaitopt.optimize.arcs import describe_bounds, detect_bound_arcs
+from gaitopt.optimize.attempt import _collocation, attempt
+from gaitopt.optimize.collocation import RadauMesh, lagrange_matrix
 
 #: Issue 24's independent check of the bounded optimum (right to 8e-7 relative): the stalled
 #: refinement's value on 48 intervals.
@@ -121,6 +123,45 @@ def test_pontryagin_junctions(bounded):
     assert abs(free[-1][1] + BOUND) <= 2e-3
     # The junctions are where the arcs say (0.408 s and 0.774 s, inside the step).
     assert 0.0 < edges[1] < edges[2] < gait.period
+
+
+def test_first_arcs_find_the_junctions(bounded):
+    """The first solution with arcs (6 intervals, from the first solution's nodes at the
+    bound) already has its junctions where the certified optimum has them: u is continuous
+    there (imposed), so the kink where it leaves the bound cannot hide inside the free arc's
+    first interval.  Tolerances 1e-4 s and 1e-6 relative (measured 2.3e-6 s, 2.1e-5 s and
+    1.3e-7); without the junction continuity that solution put the first junction 4.9e-3 s
+    early, 8.2e-6 below the optimum, and the refinement crept towards it at order ~3 (error
+    1.2e-7 after three doublings: not certified)."""
+    col, w, edges = _junctions(bounded)
+    problem, p = col.problem, bounded.model.p
+    first = _collocation(problem, solve.DEFAULT_MESH)
+    run = attempt(first, problem, 0, 0, None)  # the default start, as optimize_gait's
+    assert run["ok"], run["reason"]
+    structure = detect_bound_arcs(first, run["w"], p)
+    assert describe_bounds(structure, bounded.model.inputs) == "[lo free lo]"
+    arcs = _collocation(problem, RadauMesh(sum(a.intervals for a in structure[0]), first.d),
+                        structure)  # fmt: skip
+    w6, stats = solve._run(arcs, arcs.from_solution(first, run["w"], p), p)
+    assert solve._converged(stats), stats.get("return_status")
+    assert arcs.N == 6
+    edges6 = bounded.period * np.concatenate([[0.0], np.cumsum(arcs.theta_of(w6, 0))])
+    assert np.max(np.abs(edges6[1:3] - edges[1:3])) <= 1e-4
+    assert arcs.unpack(w6, p)["cost"] == pytest.approx(bounded.cost, rel=1e-6)
+
+
+def test_refinement_settles(bounded):
+    """One more doubling of the certified transcription (24 → 48 intervals, the arcs' too)
+    changes the cost by roundoff only.  Tolerance 1e-10 relative (measured 6.5e-13); with the
+    differentiation matrix fitted by least squares the cost rose with every doubling (1.6e-9
+    relative from 48 to 96 intervals) and 96 intervals did not converge."""
+    col, w = bounded.transcription
+    p = bounded.model.p
+    fine = solve._refined(col)
+    w2, stats = solve._run(fine, fine.from_solution(col, w, p), p)
+    assert solve._converged(stats), stats.get("return_status")
+    assert fine.N == 2 * col.N
+    assert fine.unpack(w2, p)["cost"] == pytest.approx(bounded.cost, rel=1e-10)
 
 
 def test_inactive_bound_leaves_the_unbounded_optimum(compass):
