@@ -96,11 +96,11 @@ def test_saturated_arcs_are_at_the_bound(bounded):
 
 def test_pontryagin_junctions(bounded):
     """Least effort: u = sat(−Bᵀλ/2) with λ continuous, so u is smooth on the free arc and
-    meets the bound continuously at the junctions.  The junction times are pinned only to third
-    order (a junction off by δ costs ~|u̇|²δ³ with |u̇| ≈ 64 N·m/s here), so the free arc's ends
-    meet the bound to about 1e-4 of it (measured 7e-5 and 7.3e-4 N·m), not to the cost's digits:
-    tolerance 2e-3 N·m (5e-4 of the bound).  A junction misplaced into a free interval (a local
-    solution seen from a poor warm start) misses by 6e-3."""
+    meets the bound continuously at the junctions.  The transcription imposes that continuity
+    (the junction time alone is pinned only to third order: a junction off by δ costs ~|u̇|²δ³
+    with |u̇| ≈ 64 N·m/s here): the free arc's ends meet the bound to roundoff, tolerance
+    1e-9 N·m (measured 2.7e-15); without the rows they missed by 2.2e-4 and 7.3e-4 N·m, and a
+    junction misplaced into a free interval by 0.17 N·m (6 intervals)."""
     gait = bounded
     col, w, edges = _junctions(gait)
     sol = col.unpack(w, gait.model.p)
@@ -115,12 +115,12 @@ def test_pontryagin_junctions(bounded):
         first += arc.intervals
     free = values[1]
     # Smooth on the free arc: consecutive interval polynomials agree at their common point
-    # (measured 1.4e-6 N·m at most; the collocated input is not continuous by construction).
+    # (measured 9.0e-7 N·m at most; the collocated input is not continuous by construction).
     jumps = [abs(a[1] - b[0]) for a, b in zip(free[:-1], free[1:], strict=True)]
     assert max(jumps) <= 1e-5
     # At the junctions the free arc meets the bound.
-    assert abs(free[0][0] + BOUND) <= 2e-3
-    assert abs(free[-1][1] + BOUND) <= 2e-3
+    assert abs(free[0][0] + BOUND) <= 1e-9
+    assert abs(free[-1][1] + BOUND) <= 1e-9
     # The junctions are where the arcs say (0.408 s and 0.774 s, inside the step).
     assert 0.0 < edges[1] < edges[2] < gait.period
 
@@ -183,21 +183,34 @@ def test_inactive_bound_leaves_the_unbounded_optimum(compass):
 
 @pytest.mark.slow  # ≥ 25 s: run by `make test-slow` (CI runs both)
 def test_five_link_with_an_active_torque_bound():
-    """OptimTraj's five-link problem (0.4 m in 0.6 s, |q| ≤ π/2, |q̇| ≤ 10) from start 4, with
-    |u| ≤ 25 N·m instead of 100: the unbounded optimum 263.6988459642 (README) peaks at
-    28.06 N·m in the swing knee and below 20.2 N·m elsewhere, so only the swing knee's bound is
-    active, on one arc after heel strike.  Certified with that arc: 263.8033335518 (measured
-    on this commit, to 1e-8 relative), discretisation error 3.3e-10, the simulation's return
-    1.8e-11 and cost 3.8e-14."""
+    """OptimTraj's five-link problem (0.4 m in 0.6 s, |q| ≤ π/2, |q̇| ≤ 10) with |u| ≤ 25 N·m
+    instead of 100, warm-started from the unbounded optimum (start 4, seed 0: README's
+    263.6988459642), which peaks at 28.06 N·m in the swing knee and below 20.2 N·m elsewhere,
+    so only the swing knee's bound is active, on one arc after heel strike.  Certified with
+    that arc: 263.8033335518 (to 1e-8 relative; measured 263.80333355161 with the exact
+    differentiation matrix, 263.8033335518 with the fitted one), discretisation error 3.4e-9,
+    the simulation's return 2.6e-11 and cost 5.1e-14.  Not from start 4 cold: its IPOPT path
+    through 40 iterations of tiny steps reached this minimum only by the luck of roundoff (with
+    the fitted matrix, Solved_To_Acceptable_Level after 116 iterations; with the exact one the
+    paths agree to 7 digits for 40 iterations, part, and it stops at 1000)."""
     model = gaitopt.model("five_link_biped")
+    unbounded = optimize_gait(
+        model,
+        period=0.6,
+        step_length=0.4,
+        bounds={name: high for name, (_, high) in model.input_bounds.items()},
+        state_bounds=model.state_bounds,
+        starts=[4],
+        seed=0,
+    )
+    assert unbounded.success, unbounded.message
     gait = optimize_gait(
         model,
         period=0.6,
         step_length=0.4,
         bounds={name: 25.0 for name in model.inputs},
         state_bounds=model.state_bounds,
-        starts=[4],
-        seed=0,
+        guess=unbounded,
     )
     assert gait.success and gait.verified, gait.message
     assert gait.discretisation_error <= 1e-8
