@@ -11,10 +11,12 @@ meets its bound.  Inside a mesh interval that kink is beyond the input polynomia
 refinement stalls (the compass gait at |τ| ≤ 4 N·m: 2.5e-6 after three doublings).  With arcs
 (the input fixed at its bound on a saturated arc, collocated as usual on a free one, the arcs'
 durations unknowns) every kink falls on an arc boundary, where the optimum puts it, and the
-refinement converges as for an unbounded optimum (the same: 8.1013037000 N²·m²·s, 6.6e-11).
-The junction times are pinned only to third order (a junction moved by δ costs ~|u̇|²δ³), so
-the free arc meets the bound at its junction to ~1e-4 of the bound, not to the cost's digits.
-An inactive bound (no node at it) leaves the transcription as it is."""
+refinement converges as for an unbounded optimum (the same: 8.1013036998 N²·m²·s, 5.3e-11).
+The junction times alone are pinned only to third order (a junction moved by δ costs
+~|u̇|²δ³): the transcription also makes the free arc's input meet the bound at each junction
+(u is continuous there, :meth:`Collocation._bound_arcs`), else a first solution can hide the
+kink inside the free arc's first interval.  An inactive bound (no node at it) leaves the
+transcription as it is."""
 
 from __future__ import annotations
 

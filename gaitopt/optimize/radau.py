@@ -50,11 +50,28 @@ def lagrange_matrix(nodes: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 
 def _derivative_matrix(nodes: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """``D[i, j] = ℓⱼ'(pointsᵢ)`` for the Lagrange basis of ``nodes``."""
-    D = np.zeros((len(points), len(nodes)))
-    for j in range(len(nodes)):
-        coeffs = np.polyfit(nodes, np.eye(len(nodes))[j], len(nodes) - 1)
-        D[:, j] = np.polyval(np.polyder(coeffs), points)
+    """``D[i, j] = ℓⱼ'(pointsᵢ)`` for the Lagrange basis of ``nodes``, in closed form:
+    ``ℓⱼ'(x) = Σ_{k≠j} 1/(xⱼ − xₖ) Π_{m≠j,k} (x − xₘ)/(xⱼ − xₘ)`` (Berrut & Trefethen 2004,
+    SIAM Review 46, §9), exact to a few ulps: each row sums to 0 within ~1e-14 for Radau degree 6.
+
+    Not a least-squares fit: ``np.polyfit`` through the Vandermonde matrix left errors of
+    6e-12 in the row sums (OpenBLAS's SkylakeX kernels; 3e-13 with its Haswell ones), and the
+    collocation equations ``Σ_r C[r, j] X_r = h f`` then carry a bias ``ε·X`` per interval that
+    does not shrink with ``h``: the cost drifted in proportion to the number of intervals (the
+    compass gait's least effort by 7e-10, 1.5e-9, 3e-9, 6e-9 from 12 to 192 intervals)."""
+    nodes = np.asarray(nodes, dtype=float)
+    points = np.atleast_1d(np.asarray(points, dtype=float))
+    n = nodes.size
+    D = np.zeros((points.size, n))
+    for j in range(n):
+        for k in range(n):
+            if k == j:
+                continue
+            term = np.full(points.size, 1.0 / (nodes[j] - nodes[k]))
+            for m in range(n):
+                if m != j and m != k:
+                    term *= (points - nodes[m]) / (nodes[j] - nodes[m])
+            D[:, j] += term
     return D
 
 
