@@ -4,6 +4,10 @@ bad input."""
 
 from __future__ import annotations
 
+import importlib.util
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -11,6 +15,8 @@ import gaitopt
 from gaitopt import testing
 from gaitopt.errors import ParameterError
 from gaitopt.models.slip_actuated import SLIP_STRIDE, SlipActuated
+
+PROBLEMS = Path(__file__).resolve().parent.parent / "problems"
 
 
 def test_slip_actuated_keeps_the_model_contract():
@@ -66,3 +72,39 @@ def test_actuator_power_is_the_energy_rate():
 def test_slip_actuated_bad_input_is_one_line():
     with pytest.raises(ParameterError, match="energy"):
         gaitopt.model("slip_actuated", energy=100.0)  # E/(m g) = 0.13 m: cannot run
+
+
+def _study():
+    spec = importlib.util.spec_from_file_location(
+        "study_slip_running_optima", PROBLEMS / "slip_running_optima.py"
+    )
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_slip_running_optima_fast_mode(tmp_path):
+    # Fast mode (~5 s): the passive SLIP's own speed, energy and stride.  The least-effort
+    # optimum there is the passive SLIP gait (F ≡ 0 is feasible, so the least effort is 0):
+    # touchdown angle 30° (Tedrake's θ_td, the model's default stride) to 1e-8 deg (the shooting
+    # gait's 1e-10 rad, through the collocation's discretisation error ≤ 1e-8), no force above
+    # 1e-6 N, and its cost of transport, from the independent simulation's work, 0 to 1e-12.
+    # The positive-work statement, whose zero-cost optima are not isolated (a held leg does no
+    # work), is recorded certified or with a reason, never as an uncertified cost.
+    study = _study()
+    assert study.main(["--fast", "--out", str(tmp_path)]) == 0
+    folder = tmp_path / "slip_running_optima"
+    data = json.loads((folder / "optima.json").read_text(encoding="utf-8"))
+    rows = {r["cost"]: r for r in data["rows"]}
+    effort = rows["effort"]
+    assert effort["certified"] and effort["speed_m_s"] == study.V_PASSIVE
+    assert effort["touchdown_angle_deg"] == pytest.approx(30.0, abs=1e-8)
+    assert effort["peak_force_N"] < 1e-6
+    assert abs(effort["cot_simulated"]) < 1e-12
+    assert abs(effort["energy_residual_J"]) < 1e-9  # work–energy balance of the orbit
+    cot = rows["cot"]
+    assert cot["certified"] == (cot["optimal_cost"] is not None)
+    assert cot["certified"] or cot["failures"]
+    if cot["certified"]:
+        assert cot["optimal_cost"] < 1e-9  # the passive gait is free
+    assert (folder / "optima.png").exists() and (folder / "optima.csv").exists()
