@@ -29,6 +29,14 @@ angle is a free coordinate of the section: the optimiser chooses it.  Energy is 
 stance when ``F ≠ 0``, but over a periodic orbit it returns to ``E``: fixing ``E`` and the
 speed states "run at this speed and energy".
 
+**Closing the orbit**: the optimiser closes an orbit in the section coordinates ``theta,
+r_dot`` only, and the lift sets ``theta_dot`` from ``E``; an actuated stride whose net work is
+not zero would come back with another energy, so another ``theta_dot``, and not be periodic.
+The flight (whose energy is constant) therefore declares its energy equal to ``E``, as two
+one-sided conditions within ``ENERGY_MARGIN`` (1e-8 relative: rounding of a simulated energy
+is ~1e-12, and 1e-8 E changes ``theta_dot`` by ~5e-8 rad/s, below the optimiser's return
+tolerance 1e-6): with ``theta``, ``r_dot`` and the energy periodic, so is ``theta_dot``.
+
 **Exact reduction**: with ``F ≡ 0`` this is the SLIP, the section one touchdown of its orbit and
 ``d`` the SLIP's stride (apex to apex distance); the default ``step_length`` is the stride of the
 SLIP's gait at its defaults (1.35576 m; ``tests/test_slip_actuated.py`` checks the gait to
@@ -56,6 +64,9 @@ _FLIGHT = ("x", "z", "x_dot", "z_dot")
 #: The stride (m) of the passive SLIP gait at the slip model's defaults: apex-to-apex distance
 #: of ``gaitopt.find_limit_cycle(gaitopt.model("slip"), {"z": 0.87})`` (1.35576453 m).
 SLIP_STRIDE = 1.3557645310670494
+#: Relative margin of the flight's energy about ``energy`` (module docstring, "Closing the
+#: orbit").
+ENERGY_MARGIN = 1e-8
 
 
 def _stance(sym: Symbols, closing: Transition) -> Phase:
@@ -242,12 +253,13 @@ class SlipActuated(HybridModel):
             doc="the hip comes within l0 of the next foothold (x = d): (x − d)² + z² = l0², "
             "approaching; polar state about the new foot",
         )
+        flight_energy = 0.5 * m * (x_dot**2 + z_dot**2) + m * g * z
         flight = Phase(
             "flight",
             _FLIGHT,
             ballistic_flow(sym, xf, g, vertical=1),
             (touchdown, fall(sym, xf, "falls (hip reaches the ground in flight)", z, "z = 0")),
-            {"energy": sym.conserved("energy", xf, 0.5 * m * (x_dot**2 + z_dot**2) + m * g * z)},
+            {"energy": sym.conserved("energy", xf, flight_energy)},
             points=ca.Function(
                 "points",
                 [xf, sym.p],
@@ -269,6 +281,25 @@ class SlipActuated(HybridModel):
                     "hip reaches the ground",
                     unit="m",
                     source="the body cannot go below the ground",
+                ),
+                # The flight's (constant) energy is the parameter E, so the touchdown that closes
+                # the stride has the section's energy: with theta and r_dot periodic, theta_dot
+                # is too (module docstring, "Closing the orbit").  Two one-sided conditions.
+                sym.constraint(
+                    "flight energy at least energy",
+                    xf,
+                    flight_energy - E * (1 - ENERGY_MARGIN),
+                    "the stride lost energy (not periodic at this energy)",
+                    unit="J",
+                    source="periodic orbit at the section's energy (the work–energy theorem)",
+                ),
+                sym.constraint(
+                    "flight energy at most energy",
+                    xf,
+                    E * (1 + ENERGY_MARGIN) - flight_energy,
+                    "the stride gained energy (not periodic at this energy)",
+                    unit="J",
+                    source="periodic orbit at the section's energy (the work–energy theorem)",
                 ),
             ),
         )
