@@ -108,3 +108,27 @@ def test_slip_running_optima_fast_mode(tmp_path):
     if cot["certified"]:
         assert cot["optimal_cost"] < 1e-9  # the passive gait is free
     assert (folder / "optima.png").exists() and (folder / "optima.csv").exists()
+
+
+def test_readme_slip_optima_table_is_the_committed_study_output():
+    # Every certified row of results/slip_running_optima/optima.csv (written by
+    # problems/slip_running_optima.py) appears in the README's table with its touchdown angle, and
+    # the table quotes no other row; the angles to the digits printed (1e-4 deg, 1e-9 deg).
+    import csv
+
+    path = PROBLEMS.parent / "results" / "slip_running_optima" / "optima.csv"
+    with open(path, encoding="utf-8") as f:
+        rows = [r for r in csv.DictReader(f) if r["certified"] == "True"]
+    readme = (PROBLEMS.parent / "README.md").read_text(encoding="utf-8")
+    start = readme.index("| cost | speed (m/s) | optimum | touchdown angle (deg)")
+    table = []
+    for line in readme[start:].splitlines()[2:]:
+        if not line.startswith("|"):
+            break
+        table.append([c.strip() for c in line.strip("|").split("|")])
+    assert len(table) == len(rows)
+    for row in rows:
+        speed = float(row["speed_m_s"])
+        match = [c for c in table if c[0] == row["cost"] and abs(float(c[1]) - speed) < 1e-5]
+        assert len(match) == 1, (row["cost"], speed)
+        assert float(match[0][3]) == pytest.approx(float(row["touchdown_angle_deg"]), abs=1e-4)
