@@ -24,6 +24,7 @@ from .raibert_hopper import RaibertHopper
 from .rimless_wheel import RimlessWheel
 from .simplest_walker import SimplestWalker
 from .slip import Slip
+from .slip_actuated import SlipActuated
 from .strandbeest import Strandbeest
 from .three_link_walker import ThreeLinkWalker
 from .vanderpol import VanDerPol
@@ -61,6 +62,7 @@ __all__ = [
     "RimlessWheel",
     "SimplestWalker",
     "Slip",
+    "SlipActuated",
     "Strandbeest",
     "ThreeLinkWalker",
     "VanDerPol",
@@ -77,6 +79,7 @@ REGISTRY: dict[str, type[HybridModel]] = {
         KneedWalker,
         FiveLinkBiped,
         Slip,
+        SlipActuated,
         VerticalHopper,
         OneDHopper,
         RaibertHopper,
