@@ -407,6 +407,13 @@ class HybridModel:
         ground).  A model whose ground slope is another quantity overrides this."""
         return float(self.params.get("slope", 0.0))
 
+    def max_step_length(self) -> float | None:
+        """The longest step the geometry allows: the largest distance between the feet at heel
+        strike (``length_unit``), twice the leg length for a biped, or None where the model
+        states none.  :func:`gaitopt.optimize_gait` refuses a longer fixed ``step_length`` at
+        once, naming it, instead of letting IPOPT find that out."""
+        return None
+
     def existence_note(self) -> str | None:
         """What closed-form theory says about the main gait's existence at these parameters, if
         anything is known (added to a failed search's message; never used to decide)."""

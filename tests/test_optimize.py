@@ -153,9 +153,11 @@ def test_nlp_gradient_matches_finite_differences(structured):
 def test_infeasible_requests_name_the_constraint():
     model = gaitopt.model("compass_gait", slope=0.0)
     # Legs of 1 m: feet at most 2 m apart.
+    # Refused before any solve by the geometry (max_step_length = 2 (a + b) = 2 m), naming the
+    # step length and the limit, as a gait that does not exist (not a solver failure).
     long = optimize_gait(model, period=0.8, step_length=2.5, verify=False)
-    assert not long.success and long.cost is None
-    assert "step length" in long.message
+    assert not long.success and long.cost is None and long.status == "not_a_gait"
+    assert "step length of 2.5 m" in long.message and "(2 m," in long.message
     weak = optimize_gait(model, bounds={"hip_torque": 0.5}, verify=False, **LEVEL)
     assert not weak.success and weak.cost is None
     assert "|hip_torque| <= 0.5" in weak.message

@@ -170,6 +170,10 @@ class CompassGait(HybridModel):
         )
         return (phase,), section
 
+    def max_step_length(self) -> float:
+        """Two legs of length a + b (m): the feet are at most 2 (a + b) apart."""
+        return 2 * (self.a + self.b)
+
     def default_start(self) -> dict[str, float]:
         """A post-impact state near the passive gait at Drake's defaults (rounded)."""
         return {"stance": -0.2, "stance_dot": 1.0, "swing_dot": 0.4}

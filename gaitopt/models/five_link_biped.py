@@ -473,6 +473,10 @@ class FiveLinkBiped(HybridModel):
         rates = ca.DM(INPUT_MATRIX).T @ x[5:]
         return ca.Function("input_rates", [x, p], [rates], ["x", "p"], ["rates"])
 
+    def max_step_length(self) -> float:
+        """Two legs of shank and thigh (m): the feet are at most 2 (l1 + l2) apart."""
+        return 2 * (self.length_shank + self.length_thigh)
+
     def default_start(self) -> dict[str, float]:
         """A plausible post-heel-strike state (rad, rad/s): trailing leg behind with a slightly
         bent knee, torso upright, walking forward (clockwise rotation of the stance leg).  Not

@@ -435,6 +435,11 @@ class KneedWalker(HybridModel):
         """Legs and curved feet, for drawing (:func:`kneed_outline`)."""
         return kneed_outline(self, phase, x, points)
 
+    def max_step_length(self) -> float:
+        """Two legs of shank a1 + b1 and thigh a2 + b2 (m): the feet are at most twice that
+        apart."""
+        return 2 * (self.a1 + self.b1 + self.a2 + self.b2)
+
     def default_start(self) -> dict[str, float]:
         """A post-heel-strike state near the passive gait at the defaults (rounded)."""
         return {"q1": -0.19, "q1_dot": 1.1, "q2_dot": 0.06}

@@ -323,6 +323,19 @@ def solve_problem(
             f"serially (scheduler=None)"
         )
     check_warm_start(problem, guess)
+    longest = problem.model.max_step_length()
+    if problem.step_length is not None and longest is not None and problem.step_length > longest:
+        unit = problem.model.length_unit
+        return OptimalGait(
+            False,
+            f"no gait: a step length of {problem.step_length:g} {unit} is longer than the legs "
+            f"can span ({longest:g} {unit}, {problem.model.name}.max_step_length()); fix a step "
+            f"length below it",
+            status="not_a_gait",
+            model=problem.model,
+            cost_kind=problem.cost_kind,
+            problem=problem.describe(),
+        )
     # ρ(A) ≤ R needs a roughness budget: by default from the optimum without the bound.
     problem, unbounded, failure = with_roughness_budget(
         problem,
