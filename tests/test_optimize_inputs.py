@@ -52,7 +52,7 @@ def _cli_error(argv, capsys) -> str:
 # -- task 2: a failed result as a warm start ------------------------------------------------------
 @pytest.fixture(scope="module")
 def failed():
-    # Legs of 1 m: feet at most 2 m apart, so 2.5 m is infeasible (IPOPT says so: no orbit).
+    # Legs of 1 m: feet at most 2 m apart, so 2.5 m is refused before any solve: no orbit.
     gait = optimize_gait(gaitopt.model("compass_gait", slope=0.0), period=0.8, step_length=2.5,
                          verify=False)  # fmt: skip
     assert not gait.success and gait.orbit == []
@@ -67,7 +67,7 @@ def test_failed_result_as_guess_is_an_input_error(failed):
     assert isinstance(error, WarmStartError) and isinstance(error, GuessError)
     assert isinstance(error, ValueError)
     text = str(error)
-    assert text.startswith("`guess` is a failed OptimalGait (success=False: no gait meets")
+    assert text.startswith("`guess` is a failed OptimalGait (success=False: no gait: a step")
     assert "no orbit" in text and "guess=None" in text and "success=True" in text
 
 
