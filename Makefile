@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: install gaits studies test test-slow bench lint clean
+.PHONY: install gaits studies studies-check test test-slow bench lint clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -31,13 +31,21 @@ studies: $(STAMP)
 	  echo "== $$script"; MPLBACKEND=Agg $(BIN)/python "$$script" --out results; \
 	done
 
+# Reproduce: run the studies (all, or STUDIES="a b") into a scratch folder and compare every number
+# they write with the committed results/ (1e-8 relative; scripts/compare_results.py says what is exempt).
+STUDIES ?= $(basename $(notdir $(wildcard problems/*.py)))
+studies-check: $(STAMP)
+	@set -e; fresh=$$(mktemp -d); for study in $(STUDIES); do \
+	  echo "== $$study"; MPLBACKEND=Agg $(BIN)/python problems/$$study.py --out $$fresh; \
+	done; $(BIN)/python scripts/compare_results.py $$fresh --results results
+
 bench: $(STAMP)
 	-$(BIN)/python -m pip install --quiet -e '.[peers]' || echo "Drake not installable here: benchmarking without peers"
 	MPLBACKEND=Agg $(BIN)/python -m bench --out results/bench.json
 
 lint: $(STAMP)
-	$(BIN)/ruff check gaitopt tests problems bench
-	$(BIN)/ruff format --check gaitopt tests problems bench
+	$(BIN)/ruff check gaitopt tests problems bench scripts
+	$(BIN)/ruff format --check gaitopt tests problems bench scripts
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache .ruff_cache
