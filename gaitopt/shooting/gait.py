@@ -1,10 +1,10 @@
-"""A gait from a guess: the direct solve below :func:`~gaitopt.shooting.find.find_limit_cycle`
+"""A gait from a guess: the direct solve below :func:`~gaitopt.search.find_limit_cycle`
 — the argument checks, the guess (a simulation or a previous orbit), the solve on the
 :class:`~gaitopt.shooting.problem.ShootingProblem` (:func:`solve_gait`: mesh refinement until
 the discretisation error is below the tolerance, and
 :func:`~gaitopt.shooting.certify.certify`), and the record of a search that found nothing
 (:func:`failed`).  No homotopy, no multi-start: those (:mod:`gaitopt.homotopy`) call this, and
-:func:`~gaitopt.shooting.find.find_limit_cycle` puts them together."""
+:func:`~gaitopt.search.find_limit_cycle` puts them together."""
 
 from __future__ import annotations
 
@@ -50,7 +50,7 @@ def check_arguments(
     tol: float,
     scheduler: str | None = None,
 ) -> tuple[HybridModel, int, float, np.ndarray]:
-    """The checks of :func:`~gaitopt.shooting.find.find_limit_cycle`'s arguments, before any
+    """The checks of :func:`~gaitopt.search.find_limit_cycle`'s arguments, before any
     work (bad input fails fast): the model (a name is looked up), ``steps``, ``tol`` and the
     inputs as they are used; raises :class:`~gaitopt.errors.GaitoptInputError` (a
     :class:`~gaitopt.errors.GuessError` for an explicit guess the model cannot start from)."""
@@ -103,7 +103,7 @@ def direct_solve(
     verify: bool = True,
     tol: float = 1e-10,
 ) -> LimitCycle:
-    """:func:`~gaitopt.shooting.find.find_limit_cycle` with ``follow=False`` and one start: the
+    """:func:`~gaitopt.search.find_limit_cycle` with ``follow=False`` and one start: the
     solve from the guess itself (a simulation of ``steps`` returns from the section point, the
     default start when ``guess`` is None, or a previous orbit's nodes), the arguments as there."""
     start = time.perf_counter()
@@ -183,7 +183,7 @@ def solve_gait(
     """Solve ``problem`` from the unknowns ``w0`` at ``model``'s parameters, refine the mesh
     until the discretisation error is below ``tol``, and certify the orbit.
 
-    The part of :func:`~gaitopt.shooting.find.find_limit_cycle` after the guess, for callers
+    The part of :func:`~gaitopt.search.find_limit_cycle` after the guess, for callers
     that build the unknowns themselves (branch switching at a period doubling, warm starts).
 
     Parameters
@@ -197,14 +197,14 @@ def solve_gait(
     u : numpy.ndarray
         Per-step inputs.
     method, verify, tol
-        As :func:`~gaitopt.shooting.find.find_limit_cycle`.
+        As :func:`~gaitopt.search.find_limit_cycle`.
     start : float, optional
         ``time.perf_counter()`` when the search began (for ``solve_time``).
 
     Returns
     -------
     LimitCycle
-        As :func:`~gaitopt.shooting.find.find_limit_cycle`.
+        As :func:`~gaitopt.search.find_limit_cycle`.
     """
     start = time.perf_counter() if start is None else start
     steps = problem.cycles
@@ -357,7 +357,7 @@ def failed(model, steps: int, u, start: float, message: str, status: str, **extr
 
 def gait_task(point: Mapping[str, Any], solve: Callable[..., LimitCycle]) -> dict[str, Any]:
     """A limit cycle at a sweep point, by ``solve`` (:func:`direct_solve` or
-    :func:`~gaitopt.shooting.find.find_limit_cycle`): ``{"model": name, "params": {...},
+    :func:`~gaitopt.search.find_limit_cycle`): ``{"model": name, "params": {...},
     "guess": {...} | None, "steps": k}`` → success, period, fixed point, multipliers,
     max |multiplier|, stable."""
     from ..models import model as make_model
@@ -380,5 +380,5 @@ def gait_task(point: Mapping[str, Any], solve: Callable[..., LimitCycle]) -> dic
 
 def direct_task(point: Mapping[str, Any]) -> dict[str, Any]:
     """:func:`gait_task` by :func:`direct_solve` (the multi-start's sweep task: its guesses are
-    section points, which :func:`~gaitopt.shooting.find.find_limit_cycle` solves directly)."""
+    section points, which :func:`~gaitopt.search.find_limit_cycle` solves directly)."""
     return gait_task(point, direct_solve)
