@@ -41,8 +41,10 @@ def check_workers(workers: object, scheduler: object = None) -> None:
     check_scheduler(scheduler)
     if callable(workers):
         pass
-    elif isinstance(workers, bool) or not isinstance(workers, int) or not (
-        workers >= 1 or workers == -1
+    elif (
+        isinstance(workers, bool)
+        or not isinstance(workers, int)
+        or not (workers >= 1 or workers == -1)
     ):
         raise GaitoptInputError(
             f"`workers` must be 1 (serial), a number of processes (-1: one per CPU) or a "

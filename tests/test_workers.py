@@ -56,3 +56,33 @@ def test_multi_start_is_the_same_on_a_pool_and_through_a_callers_map():
 def test_bad_workers_are_refused_before_any_work(kwargs, fragment):
     with pytest.raises(GaitoptInputError, match=fragment):
         gaitopt.find_limit_cycle(gaitopt.model("simplest_walker"), starts=2, **kwargs)
+
+
+def test_optimize_starts_through_a_callers_map_find_the_serial_minima():
+    # The same IPOPT runs, each start rebuilt from plain data and sent through the caller's map
+    # (gaitopt.optimize.starts.mapped_starts): the serial run's minima to rounding (1e-12
+    # relative), every start through the map once.
+    level = gaitopt.model("compass_gait", slope=0.0)
+    options = dict(period=0.8, step_length=0.3, starts=2, verify=False)
+    serial = gaitopt.optimize_gait(level, **options)
+    calls = []
+
+    def counting_map(func, items):
+        items = list(items)
+        calls.append(len(items))
+        return [func(item) for item in items]
+
+    mapped = gaitopt.optimize_gait(level, workers=counting_map, **options)
+    assert calls == [2]
+    assert serial.success and mapped.success, (serial.message, mapped.message)
+    assert len(mapped.minima) == len(serial.minima) >= 1
+    for a, b in zip(serial.minima, mapped.minima, strict=True):
+        assert b.cost == pytest.approx(a.cost, rel=1e-12) and b.starts == a.starts
+
+
+def test_a_warm_start_is_not_sent_through_a_map():
+    level = gaitopt.model("compass_gait", slope=0.0)
+    options = dict(period=0.8, step_length=0.3, verify=False)
+    gait = gaitopt.optimize_gait(level, **options)
+    with pytest.raises(GaitoptInputError, match="warm start is not sent"):
+        gaitopt.optimize_gait(level, guess=gait, workers=map, **options)
