@@ -234,7 +234,10 @@ def test_every_optimize_advice_names_an_existing_cli_option():
     add_arguments(parser)
     options = {s for a in parser._actions for s in a.option_strings}
     root = Path(gaitopt.__file__).parent
-    files = [root / "optimize" / n for n in ("solve.py", "guess.py", "problem.py", "result.py")]
+    files = [
+        root / "optimize" / n
+        for n in ("solve.py", "guess.py", "problem.py", "statement.py", "result.py")
+    ]
     python_only = {"model", "problem", "guess", "mesh", "verify", "state_bounds", "clearance",
                    "guard_margin", "continuous_inputs", "mesh.intervals", "mesh.degree",
                    "vary", "locate", "gait.orbit", "g", "workers"}  # fmt: skip
