@@ -176,9 +176,9 @@ def test_active_bound_gives_a_certified_stable_optimum(capsys):
     assert "spectral radius <= 1" in report["active_constraints"]
     assert report["roughness"] <= report["max_roughness"] * (1 + 1e-8)
     # The text output names the bound and the radius reached.
-    from gaitopt.cli.optimize import _report_items
+    from gaitopt.cli.optimize_report import report_items
 
-    rows = dict(i for i in _report_items(report, gaitopt.model("compass_gait", slope=0.0))
+    rows = dict(i for i in report_items(report, gaitopt.model("compass_gait", slope=0.0))
                 if isinstance(i, tuple))  # fmt: skip
     assert "bound 1;" not in rows["spectral radius"] and "bound 1)" in rows["spectral radius"]
 
