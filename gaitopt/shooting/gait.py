@@ -208,46 +208,16 @@ def solve_gait(
     """
     start = time.perf_counter() if start is None else start
     steps = problem.cycles
-    disc = problem.disc
     p = model.p
 
     def fail(message: str, status: str, **extra: Any) -> LimitCycle:
         return failed(model, steps, u, start, message, status, **extra)
 
     # -- solve, then refine the mesh until the discretisation error is below tol ---------------
-    refinements, disc_error, singular = 0, float("nan"), False
-    while True:
-        solution = problem.solve(w0, u, p, method=method)
-        w, converged, iterations, ev = (
-            solution.w, solution.converged, solution.iterations, solution.evaluation,
-        )  # fmt: skip
-        # One Jacobian per Newton step: the last one (at the solution) serves the error
-        # estimate, the multipliers and the input Jacobian.
-        ev = ev if ev is not None else problem.evaluate(w, u, p)
-        F, F_w = ev.F, ev.F_w
-        # Newton's own stopping test (abstol 1e-12) is stricter than `tol`: a point that meets
-        # `tol` is accepted (and certified) even where Newton stalled just above its abstol.
-        # A "converged" point where the equations are not even finite (e.g. a negative duration
-        # reached by the line search) is no solution.
-        finite = bool(np.all(np.isfinite(F_w)) and np.all(np.isfinite(F)))
-        converged = finite and (converged or float(np.max(np.abs(F))) <= tol)
-        if not converged:
-            break
-        try:
-            correction = problem.newton_step(F_w, problem.fine_residual(w, u, p))
-        except np.linalg.LinAlgError:  # a singular shooting Jacobian: not an isolated orbit
-            converged, singular = False, True
-            break
-        disc_error = float(np.max(np.abs(correction)))
-        # The finest mesh is bounded in absolute terms (not only per call), so that a chain of
-        # warm starts (homotopy, libraries) cannot compound refinements without limit.
-        finest = type(model).mesh[1] * _MAX_MESH_FACTOR
-        if disc_error <= tol or refinements == _MAX_REFINEMENTS or 2 * disc.rk_steps > finest:
-            break
-        disc = disc.refined()
-        problem, w0 = shooting_problem(type(model), disc, steps), w + correction
-        refinements += 1
-
+    problem, w, ev, converged, singular, iterations, disc_error, refinements = _refined_solution(
+        model, problem, w0, u, method, tol
+    )
+    F, F_w = ev.F, ev.F_w
     residual = float(np.max(np.abs(F))) if np.all(np.isfinite(F)) else float("inf")
     durations = np.asarray(ev.durations, dtype=float).ravel()
     # A period only where it means something: every phase duration positive and finite.
@@ -335,6 +305,57 @@ def solve_gait(
         start=start,
         evaluation=ev,
     )
+
+
+def _refined_solution(
+    model: HybridModel,
+    problem: ShootingProblem,
+    w0: np.ndarray,
+    u: np.ndarray,
+    method: str,
+    tol: float,
+) -> tuple[ShootingProblem, np.ndarray, Any, bool, bool, int, float, int]:
+    """Solve from ``w0``, then double the RK steps and re-solve (warm) while the discretisation
+    error estimate — one Newton correction towards twice the steps — exceeds ``tol`` (at most
+    :data:`_MAX_REFINEMENTS` times, and no finer than :data:`_MAX_MESH_FACTOR` times the model's
+    mesh).  Returns the last problem, its unknowns ``w`` and evaluation at ``w``, whether it
+    converged, whether its Jacobian was singular, Newton's iterations, the error estimate (NaN
+    where it was not reached) and the number of refinements."""
+    steps, disc, p = problem.cycles, problem.disc, model.p
+    refinements, disc_error, singular = 0, float("nan"), False
+    while True:
+        solution = problem.solve(w0, u, p, method=method)
+        w, converged, iterations, ev = (
+            solution.w, solution.converged, solution.iterations, solution.evaluation,
+        )  # fmt: skip
+        # One Jacobian per Newton step: the last one (at the solution) serves the error
+        # estimate, the multipliers and the input Jacobian.
+        ev = ev if ev is not None else problem.evaluate(w, u, p)
+        F, F_w = ev.F, ev.F_w
+        # Newton's own stopping test (abstol 1e-12) is stricter than `tol`: a point that meets
+        # `tol` is accepted (and certified) even where Newton stalled just above its abstol.
+        # A "converged" point where the equations are not even finite (e.g. a negative duration
+        # reached by the line search) is no solution.
+        finite = bool(np.all(np.isfinite(F_w)) and np.all(np.isfinite(F)))
+        converged = finite and (converged or float(np.max(np.abs(F))) <= tol)
+        if not converged:
+            break
+        try:
+            correction = problem.newton_step(F_w, problem.fine_residual(w, u, p))
+        except np.linalg.LinAlgError:  # a singular shooting Jacobian: not an isolated orbit
+            converged, singular = False, True
+            break
+        disc_error = float(np.max(np.abs(correction)))
+        # The finest mesh is bounded in absolute terms (not only per call), so that a chain of
+        # warm starts (homotopy, libraries) cannot compound refinements without limit.
+        finest = type(model).mesh[1] * _MAX_MESH_FACTOR
+        if disc_error <= tol or refinements == _MAX_REFINEMENTS or 2 * disc.rk_steps > finest:
+            break
+        disc = disc.refined()
+        problem, w0 = shooting_problem(type(model), disc, steps), w + correction
+        refinements += 1
+
+    return problem, w, ev, converged, singular, iterations, disc_error, refinements
 
 
 def failed(model, steps: int, u, start: float, message: str, status: str, **extra) -> LimitCycle:
