@@ -86,3 +86,11 @@ def test_a_warm_start_is_not_sent_through_a_map():
     gait = gaitopt.optimize_gait(level, **options)
     with pytest.raises(GaitoptInputError, match="warm start is not sent"):
         gaitopt.optimize_gait(level, guess=gait, workers=map, **options)
+
+
+def test_scheduler_is_an_adapter_onto_a_dask_backed_map():
+    # scheduler="local" (a local Dask cluster of two processes) through the same map contract:
+    # the results of Python's map, in order.
+    items = [3.0, 1.0, 2.0]
+    with worker_map(scheduler="local") as run:
+        assert list(run(_square, items)) == list(map(_square, items))
