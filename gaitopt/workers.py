@@ -12,6 +12,9 @@ map (:func:`gaitopt.sweep.dask_map`).
 :func:`worker_map` resolves the two into one map-like callable, a context manager so that a pool
 or cluster it starts is shut down when the search ends.  The searches only ever call that map:
 none of them knows which runs their tasks.
+
+A pool's processes are spawned (each imports gaitopt afresh), so a script that passes
+``workers=n`` runs its work under ``if __name__ == "__main__":``, as with any spawned pool.
 """
 
 from __future__ import annotations
