@@ -35,24 +35,25 @@ def run(
     """Measure (see the module docstring; ``rounds`` alternations of the loop and the batch, the
     median round reported); the JSON-ready record."""
     import gaitopt
-    from gaitopt.basin import _classify, _classify_many, _model_of, _setup
+    from gaitopt.basin.checks import check_setup
+    from gaitopt.basin.classify import classify, classify_many, model_of
     from gaitopt.simulation import batch_phase
 
     batch = batch or (1024 if quick else 16384)
     loop = loop or (10 if quick else 40)
     gait = gaitopt.find_limit_cycle(gaitopt.model("compass_gait"))
-    setup = _setup(gait, 40, 5, 1e-4, None).__dict__
-    model = _model_of(setup)
+    setup = check_setup(gait, 40, 5, 1e-4, None).__dict__
+    model = model_of(setup)
     centre = np.asarray(setup["centre"])
     rng = np.random.default_rng(0)
     starts = centre * (1 + _WINDOW * (2 * rng.random((batch, centre.size)) - 1))
-    _classify_many(setup, model, starts[:8])  # kernels built and loaded, untimed
-    _classify(setup, model, starts[0])
+    classify_many(setup, model, starts[:8])  # kernels built and loaded, untimed
+    classify(setup, model, starts[0])
 
     measured = []
     for _ in range(rounds):  # loop and batch alternate, so that both see the same load
         t, cpu = time.perf_counter(), time.process_time()
-        referee = [_classify(setup, model, s) for s in starts[:loop]]
+        referee = [classify(setup, model, s) for s in starts[:loop]]
         loop_s = (time.process_time() - cpu) / loop
         loop_wall = (time.perf_counter() - t) / loop
         kernel = {"calls": 0, "seconds": 0.0, "starts": 0}
@@ -116,7 +117,7 @@ def run(
 def _timed_batch(batch_phase, kernel: dict, setup, model, starts):
     """The batch classification of ``starts`` with the compiled step's calls timed in
     ``kernel``: ``(CPU s, wall s, outcomes)``."""
-    from gaitopt.basin import _classify_many
+    from gaitopt.basin.classify import classify_many
 
     real = batch_phase.Mapped.__call__
 
@@ -133,7 +134,7 @@ def _timed_batch(batch_phase, kernel: dict, setup, model, starts):
     batch_phase.Mapped.__call__ = timed
     try:
         t, cpu = time.perf_counter(), time.process_time()
-        outcomes = _classify_many(setup, model, starts)
+        outcomes = classify_many(setup, model, starts)
         return time.process_time() - cpu, time.perf_counter() - t, outcomes
     finally:
         batch_phase.Mapped.__call__ = real

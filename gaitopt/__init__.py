@@ -24,7 +24,8 @@ from .errors import (
 from .hybrid import Constraint, HybridModel, Phase, Section, Transition
 from .models import REGISTRY, model, register, unregister
 from .result import Gait, LimitCycle, OrbitArc
-from .shooting import MultipleShooting, ShootingProblem, find_limit_cycle
+from .search import find_limit_cycle
+from .shooting import MultipleShooting, ShootingProblem
 from .simulation import Simulation, simulate
 
 __all__ = [

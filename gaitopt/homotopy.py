@@ -15,13 +15,16 @@ slope) or none at all (Van der Pol at μ = 5 from the μ = 1 start).  Two remedi
 * **Multi-start** (:func:`multi_start`): a seeded Latin-hypercube sample of section points around
   the model's default start, each solved by Newton; the distinct gaits found are reported with
   their stability and the number of starts that reached each.  Deterministic for a given seed;
-  runs serially or on the Dask sweep (:func:`gaitopt.sweep.sweep`).
+  runs serially, on a process pool or any map (``workers=``, :mod:`gaitopt.workers`).
+
+Both call the direct solve (:func:`gaitopt.shooting.gait.direct_solve`); the public entry that
+chooses between them, :func:`gaitopt.find_limit_cycle`, is above, in :mod:`gaitopt.search`.
 """
 
 from __future__ import annotations
 
-import time
 from dataclasses import replace
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -29,8 +32,16 @@ import numpy as np
 from .errors import GaitoptInputError
 from .hybrid import HybridModel
 from .result import LimitCycle
+from .shooting.gait import direct_solve
+from .workers import Map, worker_map
 
-__all__ = ["follow_default_gait", "multi_start", "path_description"]
+__all__ = [
+    "changed_parameters",
+    "follow_default_gait",
+    "multi_start",
+    "path_description",
+    "start_gait",
+]
 
 #: Largest homotopy step (fraction of the path): at least four warm starts, so that Newton stays
 #: on the gait it follows instead of jumping to a neighbouring one.
@@ -74,8 +85,6 @@ def follow_default_gait(model: HybridModel, **options: Any) -> LimitCycle | None
         where along the path the gait was lost and why; ``None`` when the path cannot be taken (an
         integer parameter changed, or no default gait at the default parameters).
     """
-    from .shooting.gait import direct_solve
-
     changes = changed_parameters(model)
     specs = {s.name: s for s in type(model).parameter_specs()}
     if not changes or any(specs[k].integer for k in changes):
@@ -147,7 +156,8 @@ def multi_start(
     *,
     seed: int = 0,
     steps: int = 1,
-    scheduler: str | None = None,
+    workers: int | Map = 1,
+    scheduler: Any = None,
     **options: Any,
 ) -> list[dict[str, Any]]:
     """Solve from ``starts`` seeded section points; the distinct gaits found.
@@ -162,9 +172,11 @@ def multi_start(
         Seed of the Latin-hypercube sample: the same seed gives the same starts.
     steps : int
         Returns per orbit.
+    workers : int or callable
+        What runs the starts (:func:`gaitopt.workers.worker_map`): ``1`` serially in this
+        process, ``n`` a pool of ``n`` processes, or a map-like ``workers(func, iterable)``.
     scheduler : str, optional
-        ``None``: solve serially in this process; otherwise the Dask scheduler of
-        :func:`gaitopt.sweep.sweep` (``"local"`` or an address).
+        A Dask scheduler instead (``"local"`` or an address; :func:`gaitopt.sweep.dask_map`).
     **options
         ``inputs``, ``method``, ``tol`` of :func:`gaitopt.find_limit_cycle`.
 
@@ -174,42 +186,12 @@ def multi_start(
         One per distinct gait, most often reached first: ``fixed_point``, ``period``,
         ``multipliers`` (``[re, im]``), ``stable``, ``starts`` (how many reached it).
     """
-    from .errors import GaitoptInputError
-    from .shooting.gait import direct_solve
-
     names = model.section.coordinates
     sample = _sample(model, starts, seed)
     points = [dict(zip(names, map(float, row), strict=True)) for row in sample]
-    found: list[dict[str, Any]] = []
-    if scheduler is None:
-        for guess in points:
-            try:
-                cycle = direct_solve(model, guess, steps=steps, **options)
-            except GaitoptInputError:  # a start from which the model never completes a step
-                continue
-            if cycle.success:
-                found.append(
-                    {
-                        "fixed_point": cycle.fixed_point,
-                        "period": cycle.period,
-                        "multipliers": [[z.real, z.imag] for z in cycle.multipliers],
-                        "stable": cycle.stable,
-                    }
-                )
-    else:
-        from .shooting.gait import direct_task
-        from .sweep import sweep
-
-        tasks = [
-            {"model": model.name, "params": model.params, "guess": g, "steps": steps}
-            for g in points
-        ]
-        result = sweep(direct_task, tasks, scheduler=scheduler, progress=False)
-        found = [
-            {k: r[k] for k in ("fixed_point", "period", "multipliers", "stable")}
-            for r in result.results
-            if r["success"]
-        ]
+    task = partial(start_gait, model, steps, options)
+    with worker_map(workers, scheduler) as run:
+        found = [gait for gait in run(task, points) if gait is not None]
     distinct: list[dict[str, Any]] = []
     for gait in found:
         match = next((d for d in distinct if _same(d["fixed_point"], gait["fixed_point"])), None)
@@ -220,67 +202,21 @@ def multi_start(
     return sorted(distinct, key=lambda d: -d["starts"])
 
 
-def find_the_gait_meant(model, guess, *, follow, starts, seed, scheduler, **options) -> LimitCycle:
-    """The homotopy from the defaults and the multi-start search around
-    :func:`~gaitopt.find_limit_cycle`'s direct solve (called by it; see the module docstring)."""
-    from .shooting.gait import direct_solve
-
-    if not isinstance(starts, int) or isinstance(starts, bool) or not 1 <= starts <= _MAX_STARTS:
-        raise GaitoptInputError(
-            f"`starts` must be an integer from 1 to {_MAX_STARTS}, got {starts!r}; e.g. starts=8"
-        )
-    if not isinstance(seed, int) or isinstance(seed, bool):
-        raise GaitoptInputError(f"`seed` must be an integer, got {seed!r}; e.g. seed=0")
-    start = time.perf_counter()
-    steps = options.pop("steps")
-    direct = lambda: direct_solve(model, guess, steps=steps, **options)  # noqa: E731
-    cycle = None
-    if guess is None and steps == 1 and follow is not False:
-        followed = follow_default_gait(model, **options)
-        if followed is not None and followed.success:
-            cycle = followed
-        elif followed is not None:  # lost on the way: try the default start directly
-            cycle = direct()
-            lost = followed.message
-            if cycle.success:
-                cycle = replace(
-                    cycle,
-                    message=f"{cycle.message}; found from the default start ({lost})",
-                    route=f"direct from the default start; {lost}",
-                )
-            else:
-                cycle = replace(
-                    cycle,
-                    message=(
-                        f"no gait found. Following the default gait from the default parameters "
-                        f"({path_description(changed_parameters(model))}): {lost}. From the "
-                        f"default start: {cycle.message}. Try `--starts 16` (a multi-start "
-                        f"search), a --guess near a gait you know, or `gaitopt continue` to see "
-                        f"where the branch ends"
-                    ),
-                    route="homotopy from the defaults, then direct from the default start",
-                )
-    if cycle is None:
-        cycle = direct()
-        if guess is None and not cycle.route:
-            cycle = replace(cycle, route="direct from the default start")
-    if starts > 1:
-        gaits = multi_start(
-            model, starts, seed=seed, steps=steps, scheduler=scheduler,
-            **{k: v for k, v in options.items() if k in ("inputs", "method", "tol")},
-        )  # fmt: skip
-        if not cycle.success and gaits:  # the multi-start found what the default route did not
-            best = gaits[0]
-            cycle = direct_solve(
-                model,
-                {k: best["fixed_point"][k] for k in model.section.coordinates},
-                steps=steps,
-                **options,
-            )
-        count = f"{len(gaits)} distinct gait(s) from {starts} starts (seed {seed})"
-        cycle = replace(cycle, gaits=gaits, message=f"{cycle.message}; multi-start: {count}")
-    return replace(cycle, solve_time=time.perf_counter() - start)
-
-
-#: Most starts of one multi-start search (each a full solve: 1000 take minutes).
-_MAX_STARTS = 1000
+def start_gait(
+    model: HybridModel, steps: int, options: dict[str, Any], guess: dict[str, float]
+) -> dict[str, Any] | None:
+    """One start of :func:`multi_start` (a task of its map: picklable, returns plain data): the
+    direct solve from the section point ``guess``; ``None`` where no gait was found or the model
+    never completes a step from there."""
+    try:
+        cycle = direct_solve(model, guess, steps=steps, **options)
+    except GaitoptInputError:  # a start from which the model never completes a step
+        return None
+    if not cycle.success:
+        return None
+    return {
+        "fixed_point": cycle.fixed_point,
+        "period": cycle.period,
+        "multipliers": [[z.real, z.imag] for z in cycle.multipliers],
+        "stable": cycle.stable,
+    }

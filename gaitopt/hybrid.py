@@ -9,269 +9,39 @@ counts only where it is positive (the compass gait's swing foot scuffing the gro
 Every function is a CasADi :class:`casadi.Function` of the state ``x``, the per-step input ``u``
 (constant over a step; empty for passive models) and the parameter vector ``p``.  Parameters are
 *symbolic* inputs, so a model class is built once and every parameter value reuses the graph.
+
+This module is the model, :class:`HybridModel`; its parts are in :mod:`gaitopt.phases`
+(:class:`Phase`, :class:`Transition`, :class:`Constraint`, :class:`Section`,
+:class:`Structure`), the symbols its ``build`` works with in :mod:`gaitopt.symbols` and the checks
+of a built structure in :mod:`gaitopt.model_checks`; all are importable from here too.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import casadi as ca
 import numpy as np
 
 from .errors import FrozenModelError, StateError
+from .model_checks import check_declared, validate_structure
 from .parameters import ParameterSpec, check_parameter, parameter_specs
+from .phases import Constraint, Phase, Section, Structure, Transition, rate_along
+from .symbols import Symbols
 
-__all__ = ["Transition", "Constraint", "Phase", "Section", "Structure", "HybridModel", "Symbols"]
-
-
-@dataclass(frozen=True)
-class Transition:
-    """A guard and its reset.
-
-    Attributes
-    ----------
-    name : str
-        What happens (``"heel strike"``).
-    guard : casadi.Function
-        ``g(x, u, p) -> scalar``; the transition fires when it crosses zero.
-    direction : int
-        ``+1``: fires when ``g`` increases through zero; ``-1``: when it decreases through zero.
-    reset : casadi.Function or None
-        ``r(x, u, p) -> x⁺`` in the target phase's coordinates; ``None`` ends the motion (a fall).
-    target : int or None
-        Index of the phase entered after the reset.
-    admissible : casadi.Function or None
-        ``a(x, u, p) -> scalar``; a crossing counts only where ``a > 0`` (spurious-crossing rule).
-    impact : bool
-        Whether the reset is an impact (changes velocities) rather than a relabelling.
-    foothold : str or None
-        Name of the phase point (see :attr:`Phase.points`) that becomes the new contact point,
-        for drawing successive steps; ``None`` if the contact does not move.
-    doc : str
-        The guard and reset equations, with their source.
-    returns_to_section : bool
-        Whether this transition, too, ends a step on the Poincaré section (``transitions[0]`` of
-        the last phase always does).  The rimless wheel's backward step: the chapter's return map
-        counts every impact, rocking back as well as vaulting forward.  Default ``False``.
-    """
-
-    name: str
-    guard: ca.Function
-    direction: int
-    reset: ca.Function | None
-    target: int | None
-    admissible: ca.Function | None = None
-    impact: bool = True
-    foothold: str | None = None
-    doc: str = ""
-    returns_to_section: bool = False
-
-    @property
-    def terminal(self) -> bool:
-        """Whether the motion ends here (a fall)."""
-        return self.reset is None
-
-
-@dataclass(frozen=True)
-class Constraint:
-    """A unilateral condition ``c(x, u, p) ≥ 0`` the physics needs throughout a phase.
-
-    A gait must satisfy every constraint its model declares: a swing foot above the ground, a
-    trailing foot that lifts off after heel strike, a leg that pushes rather than pulls, a ball
-    above its paddle.  The checks are made three times, independently: by the certificate of
-    both front doors (:mod:`gaitopt.orbit.certificate`) on the orbit's dense samples, by the
-    verification simulation (where ``c`` falling through zero ends the motion as the event
-    :attr:`outcome`), and so by continuation, which reports a ``boundary`` special point where a
-    constraint becomes active.
-
-    Attributes
-    ----------
-    name : str
-        The condition in words (``"swing foot above the slope"``).
-    function : casadi.Function
-        ``c(x, u, p) -> scalar`` in a stated unit; the condition is ``c ≥ 0``.
-    outcome : str
-        The event that a violation is (``"trip"``, ``"leg pulls"``): the name of the terminal
-        event in a simulation and of the failure in a message.
-    at_start : bool
-        ``c = 0`` where the phase begins, by construction (a trailing foot that starts on the
-        ground): then ``c`` must rise at once, ``ċ = ∇c · f > 0`` at the start (the foot lifts
-        off), and be positive after it.
-    at_end : bool
-        ``c = 0`` where the phase ends, by construction (a foot that touches down at the guard).
-    unit : str
-        Unit of ``c`` (``"m"``, ``"N"``).
-    source : str
-        Where the condition comes from.
-    """
-
-    name: str
-    function: ca.Function
-    outcome: str
-    at_start: bool = False
-    at_end: bool = False
-    unit: str = ""
-    source: str = ""
-
-
-_RATES: dict[tuple[int, int], tuple[ca.Function, ca.Function, ca.Function]] = {}
-
-
-def rate_along(flow: ca.Function, g: ca.Function) -> ca.Function:
-    """``ġ(x, u, p) = ∇g(x) · f(x, u, p)``: the rate of change of ``g`` along the flow ``f``
-    (built once per pair of functions)."""
-    key = (id(flow), id(g))
-    if key not in _RATES:
-        x, u, p = (ca.SX.sym(n, flow.size1_in(i)) for i, n in enumerate(("x", "u", "p")))
-        rate = ca.jtimes(g(x, u, p), x, flow(x, u, p))
-        # Keep flow and g alive with their rate, so that their ids stay theirs.
-        _RATES[key] = (ca.Function("rate", [x, u, p], [rate], ["x", "u", "p"], ["rate"]), flow, g)
-    return _RATES[key][0]
-
-
-@dataclass(frozen=True)
-class Phase:
-    """One smooth phase of the hybrid cycle.
-
-    Attributes
-    ----------
-    name : str
-        Phase name (``"stance"``, ``"three-link swing"``).
-    states : tuple of str
-        State names, in the order of the state vector.
-    flow : casadi.Function
-        ``f(x, u, p) -> ẋ``.
-    transitions : tuple of Transition
-        ``transitions[0]`` continues the gait cycle; the others (falls, backward steps) are
-        exits a simulation must honour and a gait must not touch.
-    conserved : mapping of str to casadi.Function
-        Quantities ``c(x, p)`` constant along the passive flow (``u = 0``), e.g. energy.
-    points : casadi.Function or None
-        ``points(x, p) -> 2×K`` positions (m) of named points for drawing, world frame (y up),
-        relative to the contact point.
-    point_names : tuple of str
-        Names of the columns of ``points``.
-    bodies : casadi.Function or None
-        ``bodies(x, p) -> (m, r, v)``: point masses (K×1, kg), positions and velocities (2×K,
-        world frame, relative to the contact point); for momentum and energy checks.
-    constraints : tuple of Constraint
-        The unilateral conditions the physics needs in this phase (see :class:`Constraint`).
-        A model that ignores one by convention says so in its docstring (the compass gait's
-        mid-swing scuff).
-    limits : mapping of str to tuple of Constraint
-        Optional conditions ``c ≥ 0`` that are no physics but a design's choice (joint limits: a
-        knee that must not hyperextend), by the name an optimiser selects them with
-        (:attr:`gaitopt.optimize.problem.GaitProblem.path_constraints`, ``--constrain NAME``):
-        imposed only on request, never by simulation or continuation.  ``at_start`` /
-        ``at_end`` mark a condition that is 0 there by construction (not imposed at that node).
-    """
-
-    name: str
-    states: tuple[str, ...]
-    flow: ca.Function
-    transitions: tuple[Transition, ...]
-    conserved: Mapping[str, ca.Function] = field(default_factory=dict)
-    points: ca.Function | None = None
-    point_names: tuple[str, ...] = ()
-    bodies: ca.Function | None = None
-    constraints: tuple[Constraint, ...] = ()
-    limits: Mapping[str, tuple[Constraint, ...]] = field(default_factory=dict)
-
-    @property
-    def n(self) -> int:
-        """State dimension."""
-        return len(self.states)
-
-
-@dataclass(frozen=True)
-class Section:
-    """The Poincaré section, parametrised by free coordinates.
-
-    The section lies in phase 0 (just after the reset that closes the cycle).  ``lift`` maps the
-    free coordinates to the full state so that its image is exactly the set the return map lands
-    in (the reset's image of the guard, within the level set of any conserved quantity).  The
-    return map in these coordinates therefore has only the nontrivial Floquet multipliers.
-
-    Attributes
-    ----------
-    coordinates : tuple of str
-        Names (a subset of phase 0's states) of the free coordinates.
-    lift : casadi.Function
-        ``lift(s, p) -> x``.
-    doc : str
-        Definition of the section.
-    """
-
-    coordinates: tuple[str, ...]
-    lift: ca.Function
-    doc: str = ""
-
-
-class Symbols:
-    """Symbolic parameters and helpers for a model's ``build`` classmethod.
-
-    ``sym.p`` is the parameter vector (CasADi SX); ``sym.slope`` etc. its named entries (a
-    parameter wins over an input of the same name); ``sym.u`` the per-step input vector and
-    ``sym.input(name)`` one of its entries.
-    """
-
-    def __init__(self, specs: Sequence[ParameterSpec], inputs: Sequence[str]):
-        self.p = ca.SX.sym("p", len(specs))
-        self.u = ca.SX.sym("u", len(inputs))
-        self._names = {s.name: i for i, s in enumerate(specs)}
-        self._inputs = {name: i for i, name in enumerate(inputs)}
-
-    def __getattr__(self, name: str) -> ca.SX:
-        if name.startswith("_"):
-            raise AttributeError(name)
-        if name in self._names:
-            return self.p[self._names[name]]
-        if name in self._inputs:
-            return self.u[self._inputs[name]]
-        raise AttributeError(f"model has no parameter or input named {name!r}")
-
-    def input(self, name: str) -> ca.SX:
-        """The per-step input ``name`` (unambiguous where a parameter has the same name, as the
-        SLIP's touchdown angle: ``sym.touchdown_angle`` is the parameter)."""
-        if name not in self._inputs:
-            raise AttributeError(f"model has no per-step input named {name!r}")
-        return self.u[self._inputs[name]]
-
-    @staticmethod
-    def states(*names: str) -> tuple[ca.SX, list[ca.SX]]:
-        """A state vector and its named elements."""
-        x = ca.SX.sym("x", len(names))
-        return x, [x[i] for i in range(len(names))]
-
-    def function(self, name: str, x: ca.SX, expr: Any) -> ca.Function:
-        """``name(x, u, p) -> expr``."""
-        return ca.Function(name, [x, self.u, self.p], [ca.SX(expr)], ["x", "u", "p"], [name])
-
-    def constraint(
-        self, name: str, x: ca.SX, expr: Any, outcome: str, **options: Any
-    ) -> Constraint:
-        """The unilateral condition ``expr ≥ 0`` (see :class:`Constraint` for ``options``)."""
-        return Constraint(name, self.function("constraint", x, expr), outcome, **options)
-
-    def conserved(self, name: str, x: ca.SX, expr: Any) -> ca.Function:
-        """``name(x, p) -> expr`` (no input: conserved only along the passive flow)."""
-        return ca.Function(name, [x, self.p], [ca.SX(expr)], ["x", "p"], [name])
-
-    def lift(self, s: ca.SX, x_expr: Any) -> ca.Function:
-        """``lift(s, p) -> x``."""
-        return ca.Function("lift", [s, self.p], [ca.SX(x_expr)], ["s", "p"], ["x"])
-
-
-@dataclass(frozen=True)
-class Structure:
-    """A model class's hybrid structure (:meth:`HybridModel.structure`): its phases, in cycle
-    order starting with the one that holds the section, and its Poincaré section."""
-
-    phases: tuple[Phase, ...]
-    section: Section
+__all__ = [
+    "Transition",
+    "Constraint",
+    "Phase",
+    "Section",
+    "Structure",
+    "HybridModel",
+    "Symbols",
+    "rate_along",
+]
 
 
 @dataclass(frozen=True)
@@ -463,8 +233,8 @@ class HybridModel:
         if cls not in HybridModel._cache:
             sym = Symbols(cls.parameter_specs(), cls.inputs)
             phases, section = cls.build(sym)
-            _validate_structure(cls, tuple(phases), section)
-            _check_declared(cls, tuple(phases), section)
+            validate_structure(cls, tuple(phases), section)
+            check_declared(cls, tuple(phases), section)
             HybridModel._cache[cls] = Structure(tuple(phases), section)
         return HybridModel._cache[cls]
 
@@ -580,81 +350,3 @@ def _frozen_setattr(self: HybridModel, name: str, value: Any) -> None:
         f"cannot assign to {cls.__name__}.{name}: models are immutable; change a parameter with "
         f"model.replace(NAME=VALUE)"
     )
-
-
-def _check_declared(cls: type, phases: tuple[Phase, ...], section: Section) -> None:
-    """The structure a class declares (:meth:`HybridModel.declared_structure`) is the one its
-    ``build`` made: phase 0's states, the section's coordinates and definition."""
-    from .errors import ModelDefinitionError
-
-    declared = cls.declared_structure()
-    built = (tuple(phases[0].states), tuple(section.coordinates), section.doc)
-    if declared is None or tuple(declared) == built:
-        return
-    what = ("declared_states", "declared_coordinates", "declared_section_doc")
-    wrong = [
-        f"{name} = {d!r} (built: {b!r})"
-        for name, d, b in zip(what, declared, built, strict=True)
-        if d != b
-    ]
-    raise ModelDefinitionError(
-        f"model class {cls.__name__}: its declaration differs from its build: {'; '.join(wrong)}"
-    )
-
-
-def _validate_structure(cls: type, phases: tuple[Phase, ...], section: Section) -> None:
-    """Check a model class's hybrid structure once, when it is built: the cycle's transitions
-    enter the next phase in order (the shooting follows the cycle order, the simulation follows
-    ``target``: they must agree), resets and guards have the right dimensions, and the section
-    lift has phase 0's dimension and leaves its own coordinates unchanged (checked at the
-    default parameters and a few section points)."""
-    from .errors import ModelDefinitionError
-
-    def fail(what: str) -> None:
-        raise ModelDefinitionError(f"model class {cls.__name__}: {what}")
-
-    if not phases:
-        fail("`build` returned no phases")
-    for i, phase in enumerate(phases):
-        if not phase.transitions:
-            fail(f"phase {phase.name!r} has no transition")
-        for j, transition in enumerate(phase.transitions):
-            where = f"transition {transition.name!r} of phase {phase.name!r}"
-            if transition.direction not in (-1, 1):
-                fail(f"{where}: direction must be +1 or -1, got {transition.direction!r}")
-            if transition.guard.numel_out(0) != 1:
-                fail(f"{where}: the guard must be scalar")
-            if transition.reset is None:  # ends the motion (a fall; the ballistic swing's end)
-                continue
-            if j == 0 and transition.target != (i + 1) % len(phases):
-                fail(
-                    f"{where} closes the phase in the cycle, so its target must be the next phase "
-                    f"({(i + 1) % len(phases)}), got {transition.target!r}"
-                )
-            if transition.target is None or not 0 <= transition.target < len(phases):
-                fail(f"{where}: target {transition.target!r} is not a phase index")
-            n_target = phases[transition.target].n
-            if transition.reset.numel_out(0) != n_target:
-                fail(
-                    f"{where}: the reset gives {transition.reset.numel_out(0)} states, the "
-                    f"target phase {phases[transition.target].name!r} has {n_target}"
-                )
-    first = phases[0]
-    missing = [c for c in section.coordinates if c not in first.states]
-    if missing:
-        fail(f"section coordinate(s) {missing} are not states of phase {first.name!r}")
-    if section.lift.numel_in(0) != len(section.coordinates) or section.lift.numel_out(0) != first.n:
-        fail(
-            f"the section lift must map {len(section.coordinates)} coordinate(s) to the "
-            f"{first.n} states of phase {first.name!r}"
-        )
-    p = np.array([spec.default for spec in cls.parameter_specs()], dtype=float)
-    index = [first.states.index(c) for c in section.coordinates]
-    for scale in (0.01, 0.1):
-        s = scale * np.arange(1, len(index) + 1, dtype=float)
-        x = np.asarray(section.lift(s, p), dtype=float).ravel()
-        if np.all(np.isfinite(x)) and np.max(np.abs(x[index] - s), initial=0.0) > 1e-12:
-            fail(
-                f"the section lift moves its own coordinates (lift(s)[{section.coordinates}] = "
-                f"{x[index]} at s = {s}): it must return them unchanged"
-            )

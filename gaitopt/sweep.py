@@ -20,9 +20,11 @@ connected ``dask.distributed.Client``, e.g. of a batch-system cluster from ``das
     result = sweep(solve_task, points, scheduler=Client(cluster), journal="map.jsonl")
 
 The sweep knows nothing of models: the tasks live with what they run —
-:func:`gaitopt.shooting.solve_task` (a limit cycle and its multipliers at given parameters —
+:func:`gaitopt.search.solve_task` (a limit cycle and its multipliers at given parameters —
 stability maps, brute-force branches) and :func:`gaitopt.simulation.simulate_task` (many steps
-from a state — orbit diagrams, basins of attraction).
+from a state — orbit diagrams, basins of attraction).  :func:`dask_map` is the same cluster as a
+plain ``map(func, iterable)``, the form in which the multi-starts take their parallelism
+(``workers=``, :mod:`gaitopt.workers`).
 """
 
 from __future__ import annotations
@@ -30,7 +32,8 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -41,7 +44,7 @@ from .arguments import check_count, check_scheduler
 from .errors import GaitoptInputError
 from .files import jsonable
 
-__all__ = ["sweep", "SweepResult", "grid"]
+__all__ = ["sweep", "SweepResult", "grid", "dask_map"]
 
 Task = Callable[[Mapping[str, Any]], Mapping[str, Any]]
 
@@ -192,7 +195,26 @@ def _run(task: Task, points, todo, scheduler, workers, chunk):
         for i in todo:
             yield [(i, task(points[i]))]
         return
-    from dask.distributed import Client, LocalCluster, as_completed
+    from dask.distributed import as_completed
+
+    with _client(scheduler, workers) as client:
+        if chunk is None:
+            n_workers = max(1, len(client.scheduler_info().get("workers", {})) or workers)
+            chunk = min(MAX_CHUNK, max(1, -(-len(todo) // (4 * n_workers))))
+        futures = {
+            client.submit(run_chunk, task, [points[i] for i in part], pure=False): part
+            for part in _chunks(todo, chunk)
+        }
+        for future in as_completed(futures):
+            yield list(zip(futures[future], future.result(), strict=True))
+
+
+@contextmanager
+def _client(scheduler: Any, workers: int) -> Iterator[Any]:
+    """A Dask client: of a local cluster of ``workers`` single-threaded processes (``None`` or
+    ``"local"``), of the scheduler at an address, or the caller's connected client (left open);
+    the ones made here are closed on exit."""
+    from dask.distributed import Client, LocalCluster
 
     cluster, own = None, True
     if scheduler in (None, "local"):
@@ -205,20 +227,39 @@ def _run(task: Task, points, todo, scheduler, workers, chunk):
     else:  # a connected Client: the caller's, left open
         client, own = scheduler, False
     try:
-        if chunk is None:
-            n_workers = max(1, len(client.scheduler_info().get("workers", {})) or workers)
-            chunk = min(MAX_CHUNK, max(1, -(-len(todo) // (4 * n_workers))))
-        futures = {
-            client.submit(run_chunk, task, [points[i] for i in part], pure=False): part
-            for part in _chunks(todo, chunk)
-        }
-        for future in as_completed(futures):
-            yield list(zip(futures[future], future.result(), strict=True))
+        yield client
     finally:
         if own:
             client.close()
             if cluster is not None:
                 cluster.close()
+
+
+@contextmanager
+def dask_map(scheduler: Any = "local", workers: int = 2) -> Iterator[Callable[..., list[Any]]]:
+    """A Dask-backed map, the adapter behind the searches' ``scheduler=``
+    (:func:`gaitopt.workers.worker_map`).
+
+    Parameters
+    ----------
+    scheduler : str or dask.distributed.Client
+        ``"local"`` (a local cluster of ``workers`` single-threaded processes), a scheduler
+        address (``"tcp://host:8786"``) or a connected client (used, not closed).
+    workers : int
+        Processes of the local cluster.
+
+    Yields
+    ------
+    callable
+        ``run(func, iterable)``: one Dask task per item, the results in the iterable's order.
+    """
+    check_scheduler(scheduler)
+    with _client(scheduler, workers) as client:
+
+        def run(func: Callable[[Any], Any], items: Iterable[Any]) -> list[Any]:
+            return list(client.gather(client.map(func, list(items), pure=False)))
+
+        yield run
 
 
 # -- the journal -------------------------------------------------------------------------------

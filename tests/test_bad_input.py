@@ -14,21 +14,16 @@ import tempfile
 
 import numpy as np
 import pytest
+from helpers import run_cli
 
 import gaitopt
 from gaitopt import cli
 from gaitopt.errors import MAX_ORBIT_STEPS, MAX_SIMULATION_STEPS
 
 
-def run(capsys, *argv: str) -> tuple[int, str, str]:
-    status = cli.main(list(argv))
-    captured = capsys.readouterr()
-    return status, captured.out, captured.err
-
-
 def bad_input(capsys, *argv: str) -> str:
     """Run ``argv``; it must exit 2 with one line on stderr; return that line."""
-    status, _, err = run(capsys, *argv)
+    status, _, err = run_cli(capsys, *argv)
     lines = err.splitlines()
     assert status == 2, err
     assert len(lines) == 1, err
@@ -56,7 +51,7 @@ def test_continue_out_that_fails_after_the_computation_falls_back(capsys, tmp_pa
     before the run is bypassed here), the files go to a fallback folder that stderr names."""
     monkeypatch.setattr(cli, "_check_out", lambda args: None)
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
-    status, out, err = run(capsys, "continue", "vanderpol", "--param", "mu", "--to", "1.1",
+    status, out, err = run_cli(capsys, "continue", "vanderpol", "--param", "mu", "--to", "1.1",
                            "--no-cascade", "--json", "--out", "/dev/null/x")  # fmt: skip
     assert status == 2
     assert json.loads(out)["success"] is True  # the result is printed as usual
@@ -72,7 +67,7 @@ def test_continue_out_that_fails_after_the_computation_falls_back(capsys, tmp_pa
 def test_planar_juggler_settings_that_moved_the_default_start_off_the_paddle(capsys, setting):
     """The default start was infeasible there (the impact above the ball's energy height) and
     its StateError escaped the CLI; now the vertical bounce (x̄, 0, E_d) is found."""
-    status, out, err = run(capsys, "solve", "planar_juggler", "--set", setting, "--json")
+    status, out, err = run_cli(capsys, "solve", "planar_juggler", "--set", setting, "--json")
     report = json.loads(out)
     assert status == 0, report["message"]
     model = gaitopt.model("planar_juggler", **{setting.split("=")[0]: float(setting.split("=")[1])})
@@ -274,7 +269,7 @@ def test_assigning_a_parameter_says_how_to_change_it():
 
 
 def test_version(capsys):
-    status, out, _ = run(capsys, "--version")
+    status, out, _ = run_cli(capsys, "--version")
     assert status == 0
     assert out.strip() == f"gaitopt {gaitopt.__version__}"
     assert gaitopt.__version__ == importlib.metadata.version("gaitopt")

@@ -240,10 +240,10 @@ def test_chunks_and_scheduler_reach_the_sweep(wheel, monkeypatch):
 
     monkeypatch.setattr(sweep_module, "sweep", recording)
     estimate = basin(wheel, chunk=1, scan=2, bisections=2, scheduler="tcp://127.0.0.1:8786")
-    assert calls == [("_rays_task", 2, 1, "tcp://127.0.0.1:8786")]
+    assert calls == [("rays_task", 2, 1, "tcp://127.0.0.1:8786")]
     assert estimate.success
     basin(wheel, scan=2, bisections=1)
-    assert calls[-1] == ("_rays_task", 2, 4, "serial")  # default: serial, chunk 4
+    assert calls[-1] == ("rays_task", 2, 4, "serial")  # default: serial, chunk 4
 
 
 def test_classify_starts_reports_each_outcome(wheel):
@@ -284,10 +284,10 @@ def test_claims_skip_the_sectors_next_to_a_flagged_ray(wheel):
 
 
 def test_module_doctests():
-    """The examples in gaitopt/basin.py's docstrings (the Wilson interval's reference values)."""
+    """The examples in gaitopt/basin/results.py's docstrings (the Wilson interval's values)."""
     import doctest
     import importlib
 
-    module = importlib.import_module("gaitopt.basin")
+    module = importlib.import_module("gaitopt.basin.results")
     failures, tried = doctest.testmod(module)
     assert tried >= 1 and failures == 0

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import run_cli
 
 from gaitopt.cli import SUBCOMMANDS, main
 from gaitopt.models import REGISTRY
@@ -25,16 +26,9 @@ SOLVE_KEYS = {
 }  # fmt: skip
 
 
-def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
-    """Exit status, stdout and stderr of ``gaitopt argv...`` run in-process."""
-    status = main(list(argv))
-    out, err = capsys.readouterr()
-    return status, out, err
-
-
 def run_json(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, object]:
     """Exit status and the single JSON document printed on stdout."""
-    status, out, _ = run(capsys, *argv)
+    status, out, _ = run_cli(capsys, *argv)
     return status, json.loads(out)  # json.loads fails if stdout holds anything else
 
 
@@ -62,7 +56,7 @@ def test_list_json_describes_every_model(capsys):
 
 
 def test_list_text_names_every_model(capsys):
-    status, out, err = run(capsys, "list")
+    status, out, err = run_cli(capsys, "list")
     assert status == 0 and err == ""
     for name in REGISTRY:
         assert name in out
@@ -98,7 +92,7 @@ def test_solve_compass_gait_json_matches_drake(capsys):
 
 
 def test_solve_text_summary(capsys):
-    status, out, err = run(capsys, "solve", "compass_gait", "--set", "slope=0.0525")
+    status, out, err = run_cli(capsys, "solve", "compass_gait", "--set", "slope=0.0525")
     assert status == 0 and err == ""
     for label in ("model", "params", "success", "period", "fixed point", "multipliers", "stable"):
         assert label in out
@@ -168,7 +162,7 @@ def test_simulate_compass_gait_json(capsys):
 
 
 def test_simulate_from_section_coordinates_text(capsys):
-    status, out, err = run(
+    status, out, err = run_cli(
         capsys, "simulate", "compass_gait", "--x0", "stance=-0.21", "--steps", "1"
     )
     assert status == 0 and err == ""
@@ -210,7 +204,7 @@ BAD_INPUT = [
 
 @pytest.mark.parametrize(("argv", "expected"), BAD_INPUT, ids=lambda v: " ".join(v))
 def test_bad_input_is_one_line_and_exit_2(capsys, argv, expected):
-    status, out, err = run(capsys, *argv)
+    status, out, err = run_cli(capsys, *argv)
     assert status == 2
     assert out == ""
     lines = err.splitlines()
@@ -222,7 +216,7 @@ def test_bad_input_is_one_line_and_exit_2(capsys, argv, expected):
 
 def test_guess_that_leads_nowhere_is_bad_input(capsys):
     # From stance = 3 rad the compass gait never strikes its heel: the library's GuessError.
-    status, out, err = run(capsys, "solve", "compass_gait", "--guess", "stance=3", "--json")
+    status, out, err = run_cli(capsys, "solve", "compass_gait", "--guess", "stance=3", "--json")
     assert status == 2 and out == ""
     assert len(err.splitlines()) == 1
     assert err.startswith("gaitopt: error: --guess stance=3: ") and "leads nowhere" in err
@@ -278,7 +272,7 @@ def test_control_compass_gait_lqr_closed_loop_multipliers(capsys):
 
 
 def test_control_from_outside_the_deadbeat_range_exits_1(capsys):
-    status, out, err = run(capsys, "control", "slip", "--kind", "deadbeat", "--from", "z=0.8")
+    status, out, err = run_cli(capsys, "control", "slip", "--kind", "deadbeat", "--from", "z=0.8")
     assert status == 1 and err == ""
     assert "deadbeat infeasible" in out and "deadbeat works for" in out
 

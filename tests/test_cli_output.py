@@ -12,19 +12,13 @@ import doctest
 import re
 
 import pytest
+from helpers import run_cli
 
 from gaitopt.cli import main
 
 #: A row of the text output: a label, at least two spaces, the value.
 _ROW = re.compile(r"^(\S.*?)\s{2,}(\S.*)$")
 _FIXED = ["--set", "slope=0", "--fix", "step_length=0.3", "--fix", "period=0.8"]
-
-
-def run(capsys, *argv):
-    """``gaitopt ARGV`` in-process: ``(status, stdout, stderr)``."""
-    status = main(list(argv))
-    captured = capsys.readouterr()
-    return status, captured.out, captured.err
 
 
 @pytest.fixture(scope="module")
@@ -176,7 +170,7 @@ def test_optimize_text_summarises_the_minima(walker_text):
 
 
 def test_solve_text_in_the_same_style(capsys):
-    status, out, _ = run(capsys, "solve", "simplest_walker")
+    status, out, _ = run_cli(capsys, "solve", "simplest_walker")
     assert status == 0
     values = {m.group(1): m.group(2) for m in rows(out)}
     assert values["period"].startswith("3.88") and " τ (1 step(s) per orbit)" in values["period"]
@@ -287,7 +281,7 @@ def test_list_builds_no_model(capsys, monkeypatch):
     for cls in REGISTRY.values():
         monkeypatch.setattr(cls, "build", classmethod(no_build))
     for argv in (["list"], ["list", "--json"]):
-        status, out, err = run(capsys, *argv)
+        status, out, err = run_cli(capsys, *argv)
         assert status == 0 and err == "" and out
     assert built == []
 
@@ -295,7 +289,7 @@ def test_list_builds_no_model(capsys, monkeypatch):
 def test_list_json_and_text_give_each_parameters_source(capsys):
     from gaitopt.models import REGISTRY
 
-    status, out, _ = run(capsys, "list", "--json")
+    status, out, _ = run_cli(capsys, "list", "--json")
     assert status == 0
     entries = {entry["name"]: entry for entry in json_loads(out)}
     assert set(entries) == set(REGISTRY)
@@ -305,7 +299,7 @@ def test_list_json_and_text_give_each_parameters_source(capsys):
         assert all(sources.values()), name  # every default says where it comes from
     compass = entries["compass_gait"]
     assert compass["input_units"] == ["N*m"]
-    status, text, _ = run(capsys, "list")
+    status, text, _ = run_cli(capsys, "list")
     for entry in entries.values():
         for p in entry["params"]:
             assert f"source: {p['source']}\n" in text

@@ -6,6 +6,7 @@ import json
 
 import numpy as np
 import pytest
+from helpers import slope_at
 
 import gaitopt
 from gaitopt import GaitoptInputError, ParameterError, ParameterPath
@@ -184,13 +185,6 @@ def kneed():
     return out
 
 
-def _slope_at(curve, radius: float) -> float:
-    lam = curve.params
-    row = np.flatnonzero(np.abs(lam[:, 1] - radius) < 1e-12)
-    assert row.size == 1
-    return float(lam[row[0], 0])
-
-
 def test_kneed_walker_pd_curve_meets_one_parameter_period_doublings(kneed):
     # Independent method: gaitopt.continuation in the slope at fixed foot radius, its PD located by
     # regula falsi on det(A + I) to 1e-10 (at R = 0: 0.1062117 rad).  Curve and branch solve the
@@ -198,7 +192,7 @@ def test_kneed_walker_pd_curve_meets_one_parameter_period_doublings(kneed):
     curve = kneed["PD"]
     assert curve.success and curve.message.startswith("reached foot_radius"), curve.message
     for radius in (0.0, KNEED_RADIUS):
-        assert _slope_at(curve, radius) == pytest.approx(kneed[radius]["PD"].param, abs=1e-8)
+        assert slope_at(curve, radius) == pytest.approx(kneed[radius]["PD"].param, abs=1e-8)
     assert kneed[0.0]["PD"].param == pytest.approx(0.1062117, abs=1e-7)
     for cycle in curve.cycles:
         assert cycle.success and cycle.verified
@@ -218,7 +212,7 @@ def test_kneed_walker_clearance_boundary_meets_one_parameter_boundary(kneed):
     # |∂c_min/∂γ| ≈ 0.075 m/rad; the verification simulation catches smaller ones), so its end
     # can only lie beyond the true boundary, by at most 3e-6 rad.
     for radius in (0.0, KNEED_RADIUS):
-        gap = kneed[radius]["boundary"].param - _slope_at(curve, radius)
+        gap = kneed[radius]["boundary"].param - slope_at(curve, radius)
         assert -1e-9 < gap < 3e-6
     # Every point's gait is certified (just inside: 1e-9 of the slope's scale) and verified.
     for cycle, (slope, _) in zip(curve.cycles, curve.params, strict=True):
@@ -234,7 +228,7 @@ def test_kneed_walker_clearance_boundary_brackets_the_graze(kneed, radius):
     # makes that ±1.5e-9 m, far above the integration error and the 1e-10 fixed-point residual).
     from scipy.integrate import solve_ivp
 
-    slope = _slope_at(kneed["boundary"], radius)
+    slope = slope_at(kneed["boundary"], radius)
     lowest = []
     guess = kneed["boundary"].cycles[0 if radius == 0.0 else -1]
     for offset in (-2e-8, 2e-8):

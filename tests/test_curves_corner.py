@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import slope_at
 
 import gaitopt
 from gaitopt.continuation import PseudoArclength, continuation
@@ -123,12 +124,6 @@ def lift_off():
     return curve, ends
 
 
-def _slope_at(curve, value: float) -> float:
-    row = np.flatnonzero(np.abs(curve.params[:, 1] - value) < 1e-12)
-    assert row.size == 1
-    return float(curve.params[row[0], 0])
-
-
 def test_lift_off_boundary_is_followed_as_a_curve(lift_off):
     curve, _ = lift_off
     assert curve.success and curve.message.startswith("reached mass_hip"), curve.message
@@ -153,7 +148,7 @@ def test_lift_off_boundary_meets_one_parameter_continuation(lift_off):
     # rad: −(that + 2e-10) < gap < 2e-10.
     curve, ends = lift_off
     for mass in (MASS_FROM, MASS_TO):
-        slope = _slope_at(curve, mass)
+        slope = slope_at(curve, mass)
         model = gaitopt.model("kneed_walker", slope=slope - 1e-5, mass_hip=mass)
         guess = curve.cycles[0 if mass == MASS_FROM else -1]
         rates = [
@@ -171,7 +166,7 @@ def test_lift_off_rate_changes_sign_across_the_curve(lift_off):
     # the three-link phase's start, is positive inside and negative outside (|∂ċ/∂γ| ≈ 5 m/s per
     # rad makes it ±5e-7 m/s, far above the 1e-10 residual's effect).
     curve, _ = lift_off
-    slope = _slope_at(curve, MASS_AT)
+    slope = slope_at(curve, MASS_AT)
     guess = curve.cycles[int(np.flatnonzero(np.abs(curve.params[:, 1] - MASS_AT) < 1e-12)[0])]
     rates = []
     for offset in (-1e-7, 1e-7):

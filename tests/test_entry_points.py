@@ -24,7 +24,6 @@ import importlib
 import json
 import os
 import re
-import shutil
 import subprocess
 import sys
 import textwrap
@@ -32,6 +31,7 @@ from importlib.metadata import EntryPoint
 from pathlib import Path
 
 import pytest
+from helpers import console_script
 
 import gaitopt
 import gaitopt.models
@@ -119,14 +119,6 @@ def _entry_point_table() -> str:
     return blocks[0]
 
 
-def _script(name: str) -> str:
-    """A console script of this interpreter's environment (the project's .venv)."""
-    beside = Path(sys.executable).parent / name
-    found = str(beside) if beside.exists() else shutil.which(name)
-    assert found, f"the `{name}` console script is not installed"
-    return found
-
-
 @pytest.fixture(scope="module")
 def installed(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
     """The environment of a process that has the example package installed (by pip, offline)."""
@@ -172,7 +164,7 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
 def test_the_console_script_solves_a_model_declared_by_an_entry_point(installed, tmp_path):
     # Closed form (docs/writing-a-model.md): v* = Δv/(1 − e) = 4 m/s, multiplier e = 0.5.
     proc = subprocess.run(
-        [_script("gaitopt"), "solve", "kicked_ball", "--json"],
+        [console_script("gaitopt"), "solve", "kicked_ball", "--json"],
         capture_output=True, text=True, env=installed, cwd=tmp_path, timeout=120,
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr
@@ -184,7 +176,7 @@ def test_the_console_script_solves_a_model_declared_by_an_entry_point(installed,
 
 def test_gaitopt_list_lists_a_model_declared_by_an_entry_point(installed, tmp_path):
     proc = subprocess.run(
-        [_script("gaitopt"), "list", "--json"],
+        [console_script("gaitopt"), "list", "--json"],
         capture_output=True, text=True, env=installed, cwd=tmp_path, timeout=120,
     )  # fmt: skip
     assert proc.returncode == 0, proc.stderr

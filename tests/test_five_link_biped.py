@@ -15,6 +15,7 @@ import math
 import casadi as ca
 import numpy as np
 import pytest
+from helpers import cross
 
 import gaitopt
 from gaitopt import gaits
@@ -84,10 +85,6 @@ def _inertias(m):
     )
 
 
-def _cross(a, b) -> float:
-    return float(a[0] * b[1] - a[1] * b[0])
-
-
 # The angular-momentum balances of Derive_Equations.m: (links, pivot, torque index in u1…u5).
 _BALANCES = (
     ((0, 1, 2, 3, 4), "P0", 0),
@@ -114,10 +111,10 @@ def _newton_euler_acceleration(m, q, qd, u4):
         for j in links:
             G, _, acc0, jac = kin[f"G{j + 1}"]
             r = G - P
-            b[row] += _cross(r, np.array([0.0, -mass[j] * m.gravity]))
-            b[row] -= _cross(r, mass[j] * acc0)
+            b[row] += cross(r, np.array([0.0, -mass[j] * m.gravity]))
+            b[row] -= cross(r, mass[j] * acc0)
             for i in range(5):
-                A[row, i] += _cross(r, mass[j] * jac[:, i])
+                A[row, i] += cross(r, mass[j] * jac[:, i])
             A[row, j] += inertia[j]
     return np.linalg.solve(A, b)
 
@@ -130,7 +127,7 @@ def _rigid_momentum(m, q, qd, pivot, links) -> float:
     total = 0.0
     for j in links:
         G, V, _, _ = kin[f"G{j + 1}"]
-        total += mass[j] * _cross(G - P, V) + inertia[j] * qd[j]
+        total += mass[j] * cross(G - P, V) + inertia[j] * qd[j]
     return total
 
 

@@ -3,21 +3,10 @@ the restricted map against the full-order closed loop, as a user of results/ rea
 
 from __future__ import annotations
 
-import importlib.util
 import json
-from pathlib import Path
 
 import pytest
-
-PROBLEMS = Path(__file__).resolve().parent.parent / "problems"
-
-
-def _run(name: str, out: Path) -> Path:
-    spec = importlib.util.spec_from_file_location(f"study_{name}", PROBLEMS / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    assert module.main(["--out", str(out), "--fast"]) == 0
-    return out / name
+from helpers import run_study
 
 
 @pytest.mark.slow  # ≥ 25 s: run by `make test-slow` (CI runs both)
@@ -29,7 +18,7 @@ def test_three_link_hzd_study(tmp_path):
     # (residual ~1.19 rad/s): μ₁ = 0.6713863 at ω_n = 5 (tests/test_three_link_walker.py), and
     # it tends to their δ² as ω_n grows (within 1e-4 at ω_n = 100: the gains study's 0.5609174
     # vs δ² = 0.5609241, computed here by quadrature).  Every gait verified (error < 1e-8).
-    folder = _run("three_link_hzd", tmp_path)
+    folder = run_study("three_link_hzd", tmp_path)
     summary = json.loads((folder / "hzd.json").read_text(encoding="utf-8"))
     inv, fixed = summary["invariant"], summary["fixed"]
     assert inv["invariance_residual"] < 1e-10
@@ -55,7 +44,7 @@ def test_three_link_hzd_optimal_study(tmp_path):
     # the start (928 vs 1305 N²·m·s computed here: at least 10 % less is asserted), meets the
     # design's constraints (δ² ≤ 0.9, N ≥ 0, the swing foot on or above the ground on the grid;
     # between grid points it dips by < 1e-5 m where it touches at mid-step), and is verified.
-    folder = _run("three_link_hzd_optimal", tmp_path)
+    folder = run_study("three_link_hzd_optimal", tmp_path)
     d = json.loads((folder / "optimal.json").read_text(encoding="utf-8"))
     opt, full = d["optimum"], d["full_order"]
     assert full["success"] and full["verified"] and full["invariance_residual"] < 1e-10

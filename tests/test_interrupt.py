@@ -19,19 +19,13 @@ import time
 from pathlib import Path
 
 import pytest
+from helpers import console_script
 
 import gaitopt
 from gaitopt import cli, gaits
 from gaitopt.cli.output import write_outputs
 from gaitopt.files import INCOMPLETE, _signals_deferred, folder_written_whole, write_json
 from gaitopt.interrupts import caused_by_interrupt, interrupts_outside_casadi
-
-
-def _script(name: str) -> str:
-    """A console script of this interpreter's environment (the project's .venv)."""
-    beside = Path(sys.executable).parent / name
-    assert beside.exists(), f"the `{name}` console script is not installed beside {sys.executable}"
-    return str(beside)
 
 
 def _partials(folder: Path) -> list[Path]:
@@ -67,7 +61,7 @@ def test_ctrl_c_while_optimize_writes_its_out_folder_leaves_no_folder(tmp_path):
     `--out` folder at all, and say one line."""
     out = tmp_path / "gait"
     proc = subprocess.Popen(
-        [_script("gaitopt"), "optimize", "compass_gait", "--out", str(out)],
+        [console_script("gaitopt"), "optimize", "compass_gait", "--out", str(out)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=_env(),
     )  # fmt: skip
     try:

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import cross
 
 import gaitopt
 from gaitopt.errors import GaitoptInputError
@@ -21,10 +22,6 @@ def _pre_impact_states(count: int = 6) -> np.ndarray:
     theta_dot = -RNG.uniform(0.1, 0.5, count)
     phi_dot = RNG.uniform(-0.5, 0.5, count)
     return np.column_stack([theta, 2 * theta, theta_dot, phi_dot])
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> float:
-    return float(a[0] * b[1] - a[1] * b[0])
 
 
 @pytest.mark.parametrize("slope", [0.0, 0.009])
@@ -62,11 +59,11 @@ def test_push_off_reset_balances_angular_momentum_about_the_new_foot():
             points = np.asarray(phase.points(x, model.p), dtype=float)
             new_foot = points[:, names.index("swing_foot")]
             e = r_hip / np.linalg.norm(r_hip)
-            before = _cross(r_hip - new_foot, v_hip + push * e)
+            before = cross(r_hip - new_foot, v_hip + push * e)
             x_plus = np.asarray(reset(x, [0.0, push], model.p), dtype=float).ravel()
             _, r_plus, v_plus = (np.asarray(v, dtype=float) for v in phase.bodies(x_plus, model.p))
             np.testing.assert_allclose(r_plus[:, 0], r_hip - new_foot, atol=1e-15)
-            assert _cross(r_plus[:, 0], v_plus[:, 0]) == pytest.approx(before, abs=1e-14)
+            assert cross(r_plus[:, 0], v_plus[:, 0]) == pytest.approx(before, abs=1e-14)
             # The hip's velocity after the heel strike is across the new leg (plastic impact).
             assert float(np.dot(v_plus[:, 0], r_plus[:, 0])) == pytest.approx(0.0, abs=1e-15)
             # The trailing foot (new swing foot) keeps zero velocity across its leg: the lift

@@ -4,12 +4,12 @@ energy (gaitopt/models/minimal_biped.py, problems/walk_run_cot.py)."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import load_study
 
 import gaitopt
 from gaitopt import testing
@@ -17,15 +17,6 @@ from gaitopt.errors import GaitoptInputError, ParameterError
 from gaitopt.models.minimal_biped import MinimalBipedRun, MinimalBipedWalk
 
 PROBLEMS = Path(__file__).resolve().parent.parent / "problems"
-
-
-def _study():
-    spec = importlib.util.spec_from_file_location(
-        "study_walk_run_cot", PROBLEMS / "walk_run_cot.py"
-    )
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 @pytest.mark.parametrize("cls", [MinimalBipedWalk, MinimalBipedRun])
@@ -111,7 +102,7 @@ def test_walking_optimum_is_certified_and_its_work_balances_its_energy():
     # W+ + W- + ΔE_heel_strike = 0 (periodic orbit), to 1e-9 J (the simulation's rtol 1e-12 and
     # the quadrature), with a heel strike that dissipates (ΔE < 0) and a positive work that is
     # the cost: cot · M g d, to the certificate's simulation rule (1e-6 relative; measured 3e-8).
-    study = _study()
+    study = load_study("walk_run_cot")
     gait = gaitopt.optimize.solve_problem(
         study.problem_at("walk", 1.0), mesh=study.MESHES["walk"][0]
     )
@@ -138,7 +129,7 @@ def test_walk_run_cot_fast_mode(tmp_path):
     # row is verified by simulation (return error below 1e-8), balances its work and energy to
     # 1e-9 J, and the walk's cost is the committed full run's at 1 m/s (the certificate's 1e-8
     # relative) when that row came from the same cold start.
-    study = _study()
+    study = load_study("walk_run_cot")
     assert study.main(["--out", str(tmp_path), "--fast"]) == 0
     data = json.loads((tmp_path / "walk_run_cot" / "cot.json").read_text(encoding="utf-8"))
     rows = {(r["gait"], r["speed_m_s"]): r for r in data["rows"]}

@@ -234,10 +234,13 @@ def test_every_optimize_advice_names_an_existing_cli_option():
     add_arguments(parser)
     options = {s for a in parser._actions for s in a.option_strings}
     root = Path(gaitopt.__file__).parent
-    files = [root / "optimize" / n for n in ("solve.py", "guess.py", "problem.py", "result.py")]
+    files = [
+        root / "optimize" / n
+        for n in ("solve.py", "guess.py", "problem.py", "statement.py", "result.py")
+    ]
     python_only = {"model", "problem", "guess", "mesh", "verify", "state_bounds", "clearance",
                    "guard_margin", "continuous_inputs", "mesh.intervals", "mesh.degree",
-                   "vary", "locate", "gait.orbit", "g"}  # fmt: skip
+                   "vary", "locate", "gait.orbit", "g", "workers"}  # fmt: skip
     # Model parameters named in a message (a model lacking `gravity`) are not options.
     python_only |= {n for cls in gaitopt.REGISTRY.values() for n in cls().params}
     checked = 0

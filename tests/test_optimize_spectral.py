@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import load_study
 
 import gaitopt
 from gaitopt.cli import main
@@ -176,31 +177,23 @@ def test_active_bound_gives_a_certified_stable_optimum(capsys):
     assert "spectral radius <= 1" in report["active_constraints"]
     assert report["roughness"] <= report["max_roughness"] * (1 + 1e-8)
     # The text output names the bound and the radius reached.
-    from gaitopt.cli.optimize import _report_items
+    from gaitopt.cli.optimize_report import report_items
 
-    rows = dict(i for i in _report_items(report, gaitopt.model("compass_gait", slope=0.0))
+    rows = dict(i for i in report_items(report, gaitopt.model("compass_gait", slope=0.0))
                 if isinstance(i, tuple))  # fmt: skip
     assert "bound 1;" not in rows["spectral radius"] and "bound 1)" in rows["spectral radius"]
 
 
 # -- the price-of-stability study --------------------------------------------------------------
-def _study():
-    import importlib.util
-
-    path = ROOT / "problems" / "optimal_compass_stability_price.py"
-    spec = importlib.util.spec_from_file_location("study_stability_price", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.mark.slow
 def test_study_fast_mode_meets_its_bounds(tmp_path):
     # The fast mode: R = 1 at the default budget (twice the unbounded optimum's roughness) and
     # R = 0.9 at four times it; each certified, costing more than the unbounded optimum, with
     # ρ <= R by AD (1e-8) and by extrapolated finite differences (1e-5); the same values as the
     # committed full run (1e-8: the same warm-start chain's first points).
-    assert _study().main(["--out", str(tmp_path), "--fast"]) == 0
+    assert (
+        load_study("optimal_compass_stability_price").main(["--out", str(tmp_path), "--fast"]) == 0
+    )
     table = json.loads((tmp_path / "optimal_compass_stability_price" / "price.json").read_text())
     rows = table["table"][1:]
     assert [(r["roughness_factor"], r["max_multiplier_R"]) for r in rows] == [(2, 1), (4, 0.9)]

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import load_study
 from scipy.integrate import quad
 
 import gaitopt
@@ -223,13 +224,7 @@ def test_a_wheel_at_rest_on_two_spokes_is_standing_not_a_timeout():
 def test_basin_study_classifications_agree_with_simulation():
     # The study's closed-form fate (energy to the first impact, Tedrake's map iterated) against
     # hybrid simulation, at starts in each kind of region of the basin figure.
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parent.parent / "problems" / "rimless_wheel_basin.py"
-    spec = importlib.util.spec_from_file_location("rimless_wheel_basin", path)
-    study = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(study)
+    study = load_study("rimless_wheel_basin")
     model = gaitopt.model("rimless_wheel")
     # -1.42 rad/s rocks forward to above ω₁ and rolls; -2.0 vaults back and stands; 0.5 stands.
     expected = {-1.42: study.ROLLING, -2.0: study.STANDING, 0.5: study.STANDING, 2.0: study.ROLLING}

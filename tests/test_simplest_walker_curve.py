@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import slope_at
 
 import gaitopt
 from gaitopt.continuation import PseudoArclength, continuation
@@ -37,13 +38,6 @@ def curve_and_checks():
     return curve, checks
 
 
-def _slope_at(curve, k: float) -> float:
-    lam = curve.params
-    row = np.flatnonzero(np.abs(lam[:, 1] - k) < 1e-12)
-    assert row.size == 1
-    return float(lam[row[0], 0])
-
-
 def test_hip_spring_adds_minus_k_phi_to_the_swing_equation_only():
     # Closed form of the model (Kuo 2002: a hip torque −k·φ between the legs, acting on the
     # infinitesimal swing foot): the flow at k differs from Garcia's (k = 0) by −k·φ in φ̈ and by
@@ -65,7 +59,7 @@ def test_pd_curve_meets_one_parameter_period_doublings(curve_and_checks):
     assert curve.success and curve.message.startswith("reached hip_stiffness"), curve.message
     assert curve.values(1)[-1] == pytest.approx(K_TO, abs=1e-12)  # ended exactly on `to`
     for k, slope in checks.items():
-        assert _slope_at(curve, k) == pytest.approx(slope, abs=1e-8)
+        assert slope_at(curve, k) == pytest.approx(slope, abs=1e-8)
     # The spring moves the PD to steeper slopes (measured: 0.0151, 0.0256, 0.0417 rad).
     assert checks[0.0] < checks[K_AT] < checks[K_TO]
 
@@ -75,9 +69,9 @@ def test_pd_at_zero_stiffness_is_the_slope_studys_and_garcias(curve_and_checks):
     # (same method, both located to 1e-10: 1e-9 rad) and at Garcia et al.'s γ ≈ 0.0151 (given to
     # three significant digits: ±5e-5 rad).
     curve, checks = curve_and_checks
-    assert _slope_at(curve, 0.0) == pytest.approx(SLOPE_STUDY_PD, abs=1e-9)
+    assert slope_at(curve, 0.0) == pytest.approx(SLOPE_STUDY_PD, abs=1e-9)
     assert checks[0.0] == pytest.approx(SLOPE_STUDY_PD, abs=1e-9)
-    assert _slope_at(curve, 0.0) == pytest.approx(0.0151, abs=5e-5)
+    assert slope_at(curve, 0.0) == pytest.approx(0.0151, abs=5e-5)
 
 
 def test_every_curve_point_is_a_certified_gait_losing_stability(curve_and_checks):

@@ -87,16 +87,17 @@ def test_batch_agrees_with_simulate_over_compass_starts(compass, offset):
 def test_basin_classification_batch_equals_per_start():
     """gaitopt.basin's batch classification and its per-start rule give the same outcome for 24
     seeded compass-gait starts in x* ± 30 % |x*| (converged, fell, not converged)."""
-    from gaitopt.basin import _classify, _classify_many, _model_of, _setup
+    from gaitopt.basin.checks import check_setup
+    from gaitopt.basin.classify import classify, classify_many, model_of
 
     gait = gaitopt.find_limit_cycle(gaitopt.model("compass_gait"))
-    setup = _setup(gait, 12, 3, 1e-4, None).__dict__
-    model = _model_of(setup)
+    setup = check_setup(gait, 12, 3, 1e-4, None).__dict__
+    model = model_of(setup)
     rng = np.random.default_rng(3)
     centre = np.asarray(setup["centre"])
     starts = centre * (1 + 0.3 * (2 * rng.random((24, centre.size)) - 1))
-    per_start = [_classify(setup, model, s) for s in starts]
-    assert _classify_many(setup, model, starts) == per_start
+    per_start = [classify(setup, model, s) for s in starts]
+    assert classify_many(setup, model, starts) == per_start
     assert len(set(per_start)) >= 2  # the sample is not all one outcome
 
 
@@ -117,19 +118,20 @@ def test_rays_in_lockstep_equal_rays_one_by_one():
     every midpoint they can visit) give exactly the radii, first failures and flags of the rays
     bisected one by one with one simulation per start (no tolerance: the same midpoints, the
     same classifications)."""
-    from gaitopt.basin import _directions, _rays_batch, _rays_task, _setup
+    from gaitopt.basin.checks import check_setup
+    from gaitopt.basin.rays import ray_directions, rays_batch, rays_task
 
     gait = gaitopt.find_limit_cycle(gaitopt.model("compass_gait"))
-    setup = _setup(gait, 12, 3, 1e-4, None)
+    setup = check_setup(gait, 12, 3, 1e-4, None)
     coordinates = ["stance", "stance_dot"]
     points = [
         setup.point(
             directions=[d], coordinates=coordinates, scan=4, bisections=6, max_radius=0.3
         )  # fmt: skip
-        for d in _directions(16, 2, 0).tolist()  # enough rays for batches (basin._SMALL)
+        for d in ray_directions(16, 2, 0).tolist()  # enough rays to batch (basin.classify.SMALL)
     ]
-    together = _rays_batch(points)
-    alone = [_rays_task(point) for point in points]
+    together = rays_batch(points)
+    alone = [rays_task(point) for point in points]
     for a, b in zip(together, alone, strict=True):
         (ray_a,), (ray_b,) = a["rays"], b["rays"]
         assert ray_a["radius"] == ray_b["radius"]

@@ -4,12 +4,12 @@ bad input."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import load_study
 
 import gaitopt
 from gaitopt import testing
@@ -74,15 +74,6 @@ def test_slip_actuated_bad_input_is_one_line():
         gaitopt.model("slip_actuated", energy=100.0)  # E/(m g) = 0.13 m: cannot run
 
 
-def _study():
-    spec = importlib.util.spec_from_file_location(
-        "study_slip_running_optima", PROBLEMS / "slip_running_optima.py"
-    )
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def test_slip_running_optima_fast_mode(tmp_path):
     # Fast mode (~5 s): the passive SLIP's own speed, energy and stride.  The least-effort
     # optimum there is the passive SLIP gait (F ≡ 0 is feasible, so the least effort is 0):
@@ -91,7 +82,7 @@ def test_slip_running_optima_fast_mode(tmp_path):
     # 1e-6 N, and its cost of transport, from the independent simulation's work, 0 to 1e-12.
     # The positive-work statement, whose zero-cost optima are not isolated (a held leg does no
     # work), is recorded certified or with a reason, never as an uncertified cost.
-    study = _study()
+    study = load_study("slip_running_optima")
     assert study.main(["--fast", "--out", str(tmp_path)]) == 0
     folder = tmp_path / "slip_running_optima"
     data = json.loads((folder / "optima.json").read_text(encoding="utf-8"))

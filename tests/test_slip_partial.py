@@ -9,24 +9,18 @@ slip_partial_stability.py), independently of the shooting that gives the 1-D mul
 
 from __future__ import annotations
 
-import importlib.util
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import load_study
 
 import gaitopt
-
-_PATH = Path(__file__).resolve().parent.parent / "problems" / "slip_partial_stability.py"
 
 
 @pytest.fixture(scope="module")
 def study():
-    spec = importlib.util.spec_from_file_location("slip_partial_stability", _PATH)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_study("slip_partial_stability")
 
 
 @pytest.fixture(scope="module")

@@ -7,28 +7,16 @@ the scripts write, as a user of results/ would.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import load_study, run_study
 
 PROBLEMS = Path(__file__).resolve().parent.parent / "problems"
 FEIGENBAUM = 4.669201609  # Feigenbaum's δ (Feigenbaum 1978, J. Stat. Phys. 19:25)
-
-
-def _module(name: str):
-    spec = importlib.util.spec_from_file_location(f"study_{name}", PROBLEMS / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def _run(name: str, out: Path, *extra: str) -> Path:
-    assert _module(name).main(["--out", str(out), "--fast", *extra]) == 0
-    return out / name
 
 
 def _load(folder: Path, name: str) -> dict:
@@ -38,7 +26,7 @@ def _load(folder: Path, name: str) -> dict:
 # -- rimless wheel -------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def rimless(tmp_path_factory):
-    return _run("rimless_wheel_slope", tmp_path_factory.mktemp("studies"))
+    return run_study("rimless_wheel_slope", tmp_path_factory.mktemp("studies"))
 
 
 def test_rimless_wheel_boundary_matches_the_closed_form(rimless):
@@ -87,7 +75,7 @@ def test_rimless_wheel_standing_is_the_rocking_maps_fixed_point(rimless):
 # -- simplest walker -----------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def garcia(tmp_path_factory):
-    return _run("simplest_walker_slope", tmp_path_factory.mktemp("studies"))
+    return run_study("simplest_walker_slope", tmp_path_factory.mktemp("studies"))
 
 
 def test_simplest_walker_gaits_at_garcias_slope(garcia):
@@ -158,7 +146,7 @@ def test_simplest_walker_step_angle_scales_as_the_cube_root_of_the_slope(garcia)
 # -- compass gait stability map and basin ------------------------------------------------------
 @pytest.fixture(scope="module")
 def goswami(tmp_path_factory):
-    return _run(
+    return run_study(
         "compass_gait_stability_map", tmp_path_factory.mktemp("studies"), "--scheduler", "serial"
     )
 
@@ -221,7 +209,7 @@ def test_basin_of_attraction_contains_the_gait_and_is_small(goswami):
 # -- compass gait on a slope: the optimum at the passive step is the passive gait ---------------
 @pytest.fixture(scope="module")
 def compass_slope(tmp_path_factory):
-    return _run("optimal_compass_slope", tmp_path_factory.mktemp("studies"))
+    return run_study("optimal_compass_slope", tmp_path_factory.mktemp("studies"))
 
 
 def test_least_effort_at_the_passive_step_is_the_passive_gait(compass_slope):
@@ -251,7 +239,7 @@ def test_least_effort_rises_quadratically_away_from_the_passive_period(compass_s
 def test_compass_library_study_reproduces_the_readme_efforts(tmp_path):
     # README table (problems/optimal_compass_library.py, full run): least effort at 0.8 s for
     # 0.2, 0.25, 0.3 m; each refined below 1e-8, so 1e-8 relative; cold starts agree (1e-8).
-    folder = _run("optimal_compass_library", tmp_path)
+    folder = run_study("optimal_compass_library", tmp_path)
     rows = np.genfromtxt(folder / "library.csv", delimiter=",", skip_header=1, usecols=(0, 1, 2))
     expected = {0.2: 0.2856223108, 0.25: 1.469482918, 0.3: 6.668848534}
     assert len(rows) == 3
@@ -312,12 +300,12 @@ def test_readme_compass_library_table_is_the_committed_study_output():
 
 def test_compass_effort_study_warm_and_cold_agree(tmp_path):
     # The script exits 0 only if every warm-started optimum equals its cold start (1e-8).
-    _run("optimal_compass_effort", tmp_path)
+    run_study("optimal_compass_effort", tmp_path)
 
 
 def test_kuo_study_push_off_is_the_closed_form(tmp_path):
     # Kuo 2002: the optimal push-off gait's P = v tan α (closed form), to 1e-9 relative.
-    summary = _load(_run("optimal_kuo_pushoff", tmp_path), "pushoff.json")
+    summary = _load(run_study("optimal_kuo_pushoff", tmp_path), "pushoff.json")
     assert summary["push_off_relative_error"] <= 1e-9
 
 
@@ -330,7 +318,7 @@ def test_one_d_hopper_study_finds_the_deadbeat_map_and_the_apex_ratio(tmp_path):
     # h_max = k s²/(2 m_b g) − s = 2.18393476 m.  Tolerances: the simulated map (rtol 1e-11)
     # 1e-8 m, the ratio 1e-9, the shooting's fixed point 1e-9 m and |λ| 1e-9, the continuation's
     # boundary 1e-7 m; the passive hopper (h_d = 0) has no gait and the report says why.
-    _run("one_d_hopper", tmp_path)
+    run_study("one_d_hopper", tmp_path)
     summary = _load(tmp_path / "one_d_hopper_study", "summary.json")
     assert summary["fixed_point"] == pytest.approx(1.0, abs=1e-9)
     assert summary["multiplier_abs"] < 1e-9
@@ -361,7 +349,7 @@ def test_three_link_walker_gain_study_sends_the_transverse_multipliers_to_zero(t
     # dynamics (ratio 1.8–2.4 measured; asserted in [1, 3]) and falls by 13 decades from ω_n = 5
     # to ω_n = 100 (to the Jacobian's rounding, < 1e-12); the step time and μ₁ settle (the
     # high-gain limit), and every gait is verified by simulation (return error < 1e-8).
-    folder = _run("three_link_walker_gains", tmp_path)
+    folder = run_study("three_link_walker_gains", tmp_path)
     summary = _load(folder, "gains.json")
     first, last = summary["default_gait"], summary["high_gain_gait"]
     assert first["step_time_s"] == pytest.approx(2.1677530383, abs=1e-8)
@@ -381,7 +369,7 @@ def test_kneed_cot_reports_the_lowest_certified_attempt_and_flags_different_mini
     # The study's choice and flag on attempts as it records them: the lowest certified cost is
     # kept whatever the order; certified costs apart by more than SAME (1e-6 relative) are
     # different local minima and are flagged with every certified cost; 1e-9 apart is one minimum.
-    study = _module("optimal_kneed_cot")
+    study = load_study("optimal_kneed_cot")
 
     def attempt(start, cost, rejected=None):
         return {"start": start, "success": cost is not None, "cost": cost,
@@ -414,7 +402,7 @@ def test_kneed_cot_fast_mode_keeps_the_lowest_certified_optimum(tmp_path):
     # attempt that failed gives its reason.  Numbers: 0.84 m/s is the README's 0.02668406090
     # (the certificate's 1e-8 relative); at 0.80 m/s the chain from 0.84 reaches the worse local
     # minimum 0.04333637603 (README: the chain from below reaches 0.0194 in the full run).
-    folder = _run("optimal_kneed_cot", tmp_path)
+    folder = run_study("optimal_kneed_cot", tmp_path)
     data = _load(folder, "cot.json")
     assert [round(p["speed"], 2) for p in data["points"]] == [0.8, 0.84]
     for point in data["points"]:
@@ -477,7 +465,7 @@ def test_compass_gait_basin_study_confirms_the_ray_estimate_on_the_grid(tmp_path
     3-D volume fraction's 95 % Wilson interval contains the brute-force 5×5×5 grid fraction of the
     same box (seeded; statistically it would fail about 1 run in 20 plus the grid's own error);
     the gait is stable (largest |multiplier| 0.5798, as `gaitopt solve compass_gait`, to 1e-3)."""
-    folder = _run("compass_gait_basin", tmp_path)
+    folder = run_study("compass_gait_basin", tmp_path)
     summary = _load(folder, "summary.json")
     assert summary["max_abs_multiplier"] == pytest.approx(0.5798, abs=1e-3)
     cut = summary["slice"]
@@ -513,7 +501,7 @@ def test_kneed_cot_chains_from_both_ends_reach_the_minimum_the_cold_starts_miss(
     # the chain from below, seeded by the rejected 0.68 orbit, finds the lower branch there, the
     # point is flagged with both costs, the second pass from above carries the lower branch
     # down, and the walk stops once no seed changes.
-    study = _module("optimal_kneed_cot")
+    study = load_study("optimal_kneed_cot")
 
     class Gait:
         def __init__(self, branch, v, ok):
@@ -555,7 +543,7 @@ def test_planar_quadruped_study_pronk_and_bound_are_unstable_passive_gaits(tmp_p
     ends at two boundaries bracketing 90 J where a flight phase's duration reaches zero (≤ 1e-6 s:
     the apex meets a touchdown or a lift-off, the gait leaves its phase sequence).  The study's
     window verdict agrees with every computed bound's |λ|max in the written tables."""
-    _run("planar_quadruped", tmp_path)
+    run_study("planar_quadruped", tmp_path)
     folder = tmp_path / "planar_quadruped_study"
     summary = _load(folder, "summary.json")
     pronk, bound = summary["defaults"]["pronk"], summary["defaults"]["bound"]
@@ -591,7 +579,7 @@ def test_planar_quadruped_raibert_study_the_controller_stabilises_the_bound(tmp_
     largest is 4.1217 (1e-4, as tests/test_planar_quadruped.py).  Along ẋ_d in [0.5, 1.5] m/s
     every gait is stable and the speed rises with ẋ_d, below it (Raibert's ẋ T_s/2 overshoots the
     neutral point); the table's `stable` column is |λ|max < 1."""
-    _run("planar_quadruped_raibert", tmp_path)
+    run_study("planar_quadruped_raibert", tmp_path)
     folder = tmp_path / "planar_quadruped_raibert_study"
     summary = _load(folder, "summary.json")
     match = summary["matched_to_passive"]
@@ -627,7 +615,7 @@ def test_biped_runner_study_symmetric_run_is_the_slip_and_the_limps_are_classifi
     0.56 rad: apex heights 0.8757558 and 0.8763260 m, multiplier 0.43740420; 1e-6) and every
     gait on it is a limp (classify); the equal-leg branch holds the symmetric run at θ_b = π/6
     and its fold (LP) where the stable run meets the unstable one."""
-    folder = _run("biped_runner", tmp_path)
+    folder = run_study("biped_runner", tmp_path)
     symmetric = _load(folder, "symmetric.json")
     for row in symmetric:
         assert row["apex_m"] == pytest.approx(row["slip_apex_m"], abs=1e-10)
@@ -655,7 +643,7 @@ def test_compass_transverse_lqr_study_fast_mode(tmp_path):
     """The transverse-LQR study in its fast mode: both controllers stabilise the level compass
     optimum (the script exits 0 only if transverse_lqr and stabilise succeed: closed-loop
     monodromy and measured multipliers within 1e-4, the perturbed runs returning)."""
-    folder = _run("compass_transverse_lqr", tmp_path)
+    folder = run_study("compass_transverse_lqr", tmp_path)
     data = _load(folder, "comparison.json")
     # the open-loop optimum is unstable (−1.34, the README's optimal-gait table)
     assert max(abs(complex(*z)) for z in data["gait"]["multipliers"]) > 1.3

@@ -14,7 +14,7 @@ import numpy as np
 from ..result import LimitCycle
 from ..shooting import shooting_problem
 from .codegen import GeneratedPolicy, compile_policy, policy_function
-from .decision import Decision, _fmt_point, _fmt_u
+from .decision import Decision, fmt_point, fmt_u
 from .errors import ControlDesignError
 
 _NEWTON = {
@@ -146,8 +146,8 @@ class Deadbeat:
             lo, hi = (np.asarray(b, dtype=float) for b in bounds)
             if np.any(u < lo) or np.any(u > hi):
                 problem = (
-                    f"the input needed, {_fmt_u(self.model, u)}, is outside its range "
-                    f"[{_fmt_u(self.model, lo)}, {_fmt_u(self.model, hi)}]"
+                    f"the input needed, {fmt_u(self.model, u)}, is outside its range "
+                    f"[{fmt_u(self.model, lo)}, {fmt_u(self.model, hi)}]"
                 )
         self.last_solution = v
         elapsed = time.perf_counter() - start
@@ -155,8 +155,8 @@ class Deadbeat:
             return Decision(False, problem, u, s, s_t, iterations, elapsed)
         return Decision(
             True,
-            f"deadbeat: {_fmt_u(self.model, u)} brings {_fmt_point(self.model, s)} to "
-            f"{_fmt_point(self.model, s_t)}",
+            f"deadbeat: {fmt_u(self.model, u)} brings {fmt_point(self.model, s)} to "
+            f"{fmt_point(self.model, s_t)}",
             u,
             s,
             s_t,

@@ -46,11 +46,11 @@ class Decision:
     solve_time: float = float("nan")
 
 
-def _fmt_u(model: HybridModel, u: np.ndarray) -> str:
+def fmt_u(model: HybridModel, u: np.ndarray) -> str:
     return ", ".join(f"{k}={v:.6g}" for k, v in zip(model.inputs, np.ravel(u), strict=True))
 
 
-def _fmt_point(model: HybridModel, s: np.ndarray) -> str:
+def fmt_point(model: HybridModel, s: np.ndarray) -> str:
     return ", ".join(
         f"{k}={v:.6g}" for k, v in zip(model.section.coordinates, np.ravel(s), strict=True)
     )

@@ -13,8 +13,8 @@ from ..hybrid import HybridModel
 from ..result import LimitCycle
 from .deadbeat_solver import Deadbeat
 from .errors import ControlDesignError
-from .linearisation import Linearisation, _sorted, linearise
-from .policy import StepController, _limits, _square
+from .linearisation import Linearisation, linearise, sorted_by_modulus
+from .policy import StepController, clip_limits, square_weight
 
 
 # -- designs ------------------------------------------------------------------------------------
@@ -45,7 +45,7 @@ def lqr(
     """
     lin = _linearisation(model, guess, target)
     m, n_u = lin.B.shape
-    Qm, Rm = _square("Q", Q, m), _square("R", R, n_u)
+    Qm, Rm = square_weight("Q", Q, m), square_weight("R", R, n_u)
     if np.min(np.linalg.eigvalsh(Rm)) <= 0:
         raise GaitoptInputError(f"`R` must be positive definite, got {Rm.tolist()}")
     K, _, poles = ct.dlqr(lin.A, lin.B, Qm, Rm)
@@ -54,9 +54,9 @@ def lqr(
         "lqr",
         lin,
         K,
-        _sorted(np.linalg.eigvals(lin.A - lin.B @ K)),
+        sorted_by_modulus(np.linalg.eigvals(lin.A - lin.B @ K)),
         {"Q": Qm, "R": Rm, "dlqr_poles": np.asarray(poles)},
-        _limits(lin.model, input_limits),
+        clip_limits(lin.model, input_limits),
     )
 
 
@@ -97,9 +97,9 @@ def acker(
         "acker",
         lin,
         K,
-        _sorted(np.linalg.eigvals(lin.A - lin.B @ K)),
+        sorted_by_modulus(np.linalg.eigvals(lin.A - lin.B @ K)),
         {"poles": poles.real if np.all(poles.imag == 0) else poles},
-        _limits(lin.model, input_limits),
+        clip_limits(lin.model, input_limits),
     )
 
 
@@ -135,9 +135,9 @@ def deadbeat(
         "deadbeat",
         lin,
         K,
-        _sorted(np.linalg.eigvals(lin.A - lin.B @ K)),
+        sorted_by_modulus(np.linalg.eigvals(lin.A - lin.B @ K)),
         {},
-        _limits(lin.model, input_limits),
+        clip_limits(lin.model, input_limits),
         Deadbeat(lin.cycle),
     )
 

@@ -12,7 +12,7 @@ from ..hybrid import HybridModel
 from ..result import LimitCycle
 from ..shooting import find_limit_cycle
 from .deadbeat_solver import Deadbeat
-from .decision import _fmt_point
+from .decision import fmt_point
 from .errors import ControlDesignError, NoGaitError, check_section_point
 
 
@@ -53,10 +53,10 @@ class Linearisation:
     @property
     def open_loop_multipliers(self) -> np.ndarray:
         """``eig(A)``: the gait's nontrivial Floquet multipliers."""
-        return _sorted(np.linalg.eigvals(self.A))
+        return sorted_by_modulus(np.linalg.eigvals(self.A))
 
 
-def _sorted(z: np.ndarray) -> np.ndarray:
+def sorted_by_modulus(z: np.ndarray) -> np.ndarray:
     z = np.asarray(z, dtype=complex)
     return z[np.argsort(-np.abs(z), kind="stable")]
 
@@ -108,7 +108,7 @@ def linearise(
                 decision = Deadbeat(cycle).solve(s_t, target=s_t)
                 if not decision.success:
                     raise NoGaitError(
-                        f"`target` {_fmt_point(model, s_t)}: no input makes it a fixed point "
+                        f"`target` {fmt_point(model, s_t)}: no input makes it a fixed point "
                         f"({decision.message})"
                     )
                 cycle = find_limit_cycle(model, target, inputs=decision.input)

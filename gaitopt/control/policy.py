@@ -13,7 +13,7 @@ from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
 from ..result import LimitCycle
 from .deadbeat_solver import Deadbeat
-from .decision import Decision, _fmt_point, _fmt_u
+from .decision import Decision, fmt_point, fmt_u
 from .errors import check_section_point
 from .linearisation import Linearisation
 
@@ -95,7 +95,7 @@ class StepController:
             reason = (
                 decision.message
                 if not decision.success
-                else f"the deadbeat input {_fmt_u(self.model, decision.input)} is outside the "
+                else f"the deadbeat input {fmt_u(self.model, decision.input)} is outside the "
                 f"input limits"
             )
             if len(s) == 1:
@@ -106,8 +106,8 @@ class StepController:
             u = self._clip(linear)
             return Decision(
                 False,
-                f"deadbeat infeasible from {_fmt_point(self.model, s)}: {reason}; applied the "
-                f"linearised deadbeat law, {_fmt_u(self.model, u)}",
+                f"deadbeat infeasible from {fmt_point(self.model, s)}: {reason}; applied the "
+                f"linearised deadbeat law, {fmt_u(self.model, u)}",
                 u,
                 s,
                 self.target
@@ -122,7 +122,7 @@ class StepController:
             + self.linearisation.A @ ds
             + self.linearisation.B @ (u - self.nominal_input)
         )
-        message = f"{self.kind}: {_fmt_u(self.model, u)}" + (
+        message = f"{self.kind}: {fmt_u(self.model, u)}" + (
             " (saturated at the input limits)" if saturated else ""
         )
         return Decision(not saturated, message, u, s, predicted, 0, time.perf_counter() - start)
@@ -161,7 +161,7 @@ class StepController:
             "kind": self.kind,
             "success": True,
             "message": f"{self.kind} controller around the gait at "
-            f"{_fmt_point(model, self.target)} ({self.cycle.message})",
+            f"{fmt_point(model, self.target)} ({self.cycle.message})",
             "section_coordinates": list(model.section.coordinates),
             "state_names": list(model.state_names),
             "fixed_point": dict(self.cycle.fixed_point),
@@ -188,7 +188,7 @@ def _pairs(z: np.ndarray) -> list[list[float]]:
     return [[float(v.real), float(v.imag)] for v in np.asarray(z, dtype=complex)]
 
 
-def _limits(
+def clip_limits(
     model: HybridModel, input_limits: tuple[Sequence[float], Sequence[float]] | None
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """The ``(low, high)`` input box: the one given, else the model's ``input_bounds``."""
@@ -209,7 +209,7 @@ def _limits(
     return lo, hi
 
 
-def _square(name: str, value: Any, size: int, default: float = 1.0) -> np.ndarray:
+def square_weight(name: str, value: Any, size: int, default: float = 1.0) -> np.ndarray:
     """A weight matrix from ``None`` (identity), a scalar, a diagonal or a full matrix."""
     if value is None:
         return default * np.eye(size)

@@ -31,7 +31,7 @@ from scipy.optimize import minimize
 
 from .invariance import make_invariant, pre_impact_state, surface_state
 from .virtual import VirtualConstraintModel, alpha_name
-from .zero_dynamics import _zd_function, annihilator
+from .zero_dynamics import annihilator, zd_function
 
 __all__ = ["SurfaceGait", "surface_gait", "optimise_alpha", "DesignResult"]
 
@@ -68,7 +68,7 @@ def surface_gait(model: VirtualConstraintModel, points: int = 201) -> SurfaceGai
     model = make_invariant(model)
     n = len(model.phase)
     row = annihilator(model)
-    zd = _zd_function(model)
+    zd = zd_function(model)
     pb = model.plant_model.p
     theta = np.linspace(model.theta_plus, model.theta_minus, points)
     X0, X1 = surface_state(model, theta, 0.0), surface_state(model, theta, 1.0)

@@ -60,7 +60,7 @@ def annihilator(model: VirtualConstraintModel) -> np.ndarray:
     return row if row.sum() >= 0 else -row
 
 
-def _zd_function(model: VirtualConstraintModel) -> ca.Function:
+def zd_function(model: VirtualConstraintModel) -> ca.Function:
     """``zd(q, qd, p_plant, B⊥) -> (σ, σ̇)`` along the closed loop (σ̇ without the torques)."""
     cls = type(model)
     if cls not in _ZD:
@@ -149,7 +149,7 @@ def restricted_map(model: VirtualConstraintModel, points: int = 401) -> Restrict
     ``points`` phases for plots.
     """
     row = annihilator(model)
-    zd = _zd_function(model)
+    zd = zd_function(model)
     pb = model.plant_model.p
     n = len(model.phase)
 

@@ -27,7 +27,7 @@ _NEWTON = {"abstol": 1e-14, "abstolStep": 1e-15, "max_iter": 30, "error_on_fail"
 
 
 @lru_cache(maxsize=1)
-def _solver() -> ca.Function:
+def closure_solver() -> ca.Function:
     """``(z guess, θ, lengths) -> (z, dz/dθ, residual)``: Newton's method on the loop closure,
     and the tangent by AD through the rootfinder (implicit function theorem)."""
     z = ca.SX.sym("z", 10)
@@ -48,7 +48,7 @@ def _solver() -> ca.Function:
 
 
 @lru_cache(maxsize=1)
-def _dyad_heights() -> ca.Function:
+def dyad_heights() -> ca.Function:
     """``(θ, lengths) -> h²`` of each dyad, in order: the squared height (fraction of the base)
     of the triangle its two links make over its base; ``h² ≤ 0`` (or NaN after an earlier
     failure) where the two circles do not meet."""

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..parameters import ParameterSpec, check_parameter, parameter, parameter_specs
-from .closure import DYADS, JOINTS, _dyad_heights, _solver
+from .closure import DYADS, JOINTS, closure_solver, dyad_heights
 from .turn import Turn
 
 #: Most crank steps per turn: each is a rootfinder solve of the loop closure (72 000 take about
@@ -156,7 +156,7 @@ class JansenLinkage:
         """
         z0 = self._initial_guess() if guess is None else np.asarray(guess, float).ravel()
         try:
-            z, dz, res = _solver()(z0, theta, self.p)
+            z, dz, res = closure_solver()(z0, theta, self.p)
         except RuntimeError:  # Newton diverged to a non-finite iterate
             raise _NoAssembly(theta, math.inf) from None
         z, dz = np.asarray(z).ravel(), np.asarray(dz).ravel()
@@ -254,7 +254,7 @@ class JansenLinkage:
         circle intersections in the order of :data:`DYADS`); failing that, the one nearest a
         dead point at the last assembled configuration ``z_last``.
         """
-        squares = np.asarray(_dyad_heights()(theta, self.p), dtype=float).ravel()
+        squares = np.asarray(dyad_heights()(theta, self.p), dtype=float).ravel()
         bad = np.nonzero(~(squares > 0))[0]
         if bad.size:
             which = int(bad[0])

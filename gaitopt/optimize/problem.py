@@ -35,7 +35,6 @@ at the end of the phase.  Speed is the total step length over the period.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -44,78 +43,45 @@ import casadi as ca
 import numpy as np
 
 from ..arguments import check_count
-from ..errors import GaitoptInputError, did_you_mean
+from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
 from .spectral_bound import check_max_multiplier
-
-__all__ = ["GaitProblem", "COSTS", "cost_unit", "MAX_STEPS"]
-
-COSTS = ("effort", "work", "cot")
-#: Most returns to the section per optimised orbit (``steps``, ``--steps``).  The transcription
-#: and its refinements grow with every step, faster than linearly (measured, one start, loaded
-#: 2-core machine): the five-link biped took 10 s and 0.6 GB at 1 step, 31 s and 1.1 GB at 2,
-#: 295 s and 9.1 GB at 4; the compass gait 1.1 s and 0.16 GB at 1, 6.6 s and 0.45 GB at 8.
-#: ``steps=1000`` grew past 5 GB before its first iteration.
-MAX_STEPS = 4
-_WHY_STEPS = (
-    "the transcription grows faster than the number of steps (the five-link biped: 9 GB at 4 "
-    f"steps); use steps <= {MAX_STEPS} (gaitopt.optimize.problem.MAX_STEPS)"
+from .statement import (
+    COSTS,
+    MAX_STEPS,
+    WHY_STEPS,
+    all_state_names,
+    bound_pair,
+    check_bounds,
+    check_cost,
+    check_footholds,
+    check_free,
+    check_lengths,
+    check_margins,
+    check_model,
+    check_not_standing,
+    check_path_constraints,
+    check_state_bounds,
+    declared_limits,
 )
+
+__all__ = [
+    "GaitProblem",
+    "COSTS",
+    "cost_unit",
+    "MAX_STEPS",
+    "all_state_names",
+    "declared_limits",
+]
+
+#: The older private name of :data:`~gaitopt.optimize.statement.WHY_STEPS`.
+_WHY_STEPS = WHY_STEPS
 _UNITS = {"effort": "N^2*m^2*s", "work": "J", "cot": "1"}
 
 
 def cost_unit(kind: str) -> str:
     """Unit of a named cost (``"effort"``: N²·m²·s for torques)."""
     return _UNITS.get(kind, "user units")
-
-
-def _names(argument: str, value: Any, example: str) -> tuple[str, ...]:
-    """A name or an iterable of names as a tuple of str, or a one-line input error."""
-    if isinstance(value, str):
-        return (value,)
-    try:
-        names = tuple(value)
-    except TypeError:
-        names = None
-    if names is None or not all(isinstance(n, str) for n in names):
-        raise GaitoptInputError(
-            f"`{argument}` must be a name or a tuple of names, got {value!r:.80}; "
-            f"e.g. {argument}={example}"
-        )
-    return names
-
-
-def _bound_pair(name: str, value: Any) -> tuple[float, float]:
-    """``bounds[name]`` as ``(low, high)``: a number ``b >= 0`` means ``(−b, b)``."""
-    try:
-        if isinstance(value, (tuple, list)):
-            low, high = (float(v) for v in value)
-        else:
-            high = float(value)
-            low = -high
-    except (TypeError, ValueError):
-        low = high = math.nan
-    if not (math.isfinite(low) and math.isfinite(high) and low <= high):
-        raise GaitoptInputError(
-            f"`bounds[{name!r}]` must be a finite number >= 0 (|u| <= it; 0 switches the input "
-            f"off) or a pair (low, high) with low <= high, got {value!r}; e.g. "
-            f"bounds={{{name!r}: 20}} or bounds={{{name!r}: (0, 20)}}"
-        )
-    return low, high
-
-
-def _positive(name: str, value: Any, *, allow_none: bool = True) -> float | None:
-    if value is None and allow_none:
-        return None
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        number = math.nan
-    if not math.isfinite(number) or number <= 0:
-        raise GaitoptInputError(
-            f"`{name}` must be a positive finite number, got {value!r}; e.g. {name}=0.8"
-        )
-    return number
 
 
 @dataclass(frozen=True)
@@ -230,190 +196,30 @@ class GaitProblem:
     max_roughness: float | None = None
 
     def __post_init__(self) -> None:
-        model = self.model
-        if not isinstance(model, HybridModel):
-            raise GaitoptInputError(
-                f"`model` must be a gaitopt model, got {type(model).__name__}; "
-                f"e.g. gaitopt.model('compass_gait')"
-            )
-        if not model.inputs:
-            raise GaitoptInputError(
-                f"`model` {model.name!r} has no inputs to optimise; choose an actuated model "
-                f"(e.g. compass_gait)"
-            )
-        if isinstance(self.cost, str):
-            if self.cost not in COSTS:
-                raise GaitoptInputError(
-                    f"`cost` must be one of {', '.join(COSTS)} or a CasADi callable, got "
-                    f"{self.cost!r}; {did_you_mean(self.cost, COSTS)}e.g. cost='effort'"
-                )
-            if self.cost in ("work", "cot"):
-                unbounded = [
-                    n
-                    for n in model.inputs
-                    if n not in dict(self.bounds) and n not in model.impulsive_inputs
-                ]
-                if unbounded:
-                    raise GaitoptInputError(
-                        f"`cost` {self.cost!r} needs a bound on every input (positive work has "
-                        f"no minimum without one: impulsive inputs approach its infimum); "
-                        f"unbounded: {', '.join(unbounded)}; e.g. bounds={{{unbounded[0]!r}: 20}}"
-                    )
-                missing = [i for i in range(len(model.phases)) if model.input_rates(i) is None]
-                if missing:
-                    raise GaitoptInputError(
-                        f"`cost` {self.cost!r} needs the rates the inputs do work on, which "
-                        f"{model.name} does not declare (HybridModel.input_rates); use "
-                        f"cost='effort'"
-                    )
-        elif not callable(self.cost):
-            raise GaitoptInputError(
-                f"`cost` must be a name or a callable cost(x, u, p), got {self.cost!r}"
-            )
-        object.__setattr__(self, "steps", check_count("steps", self.steps, 1, MAX_STEPS,
-                                                      _WHY_STEPS))  # fmt: skip
-        object.__setattr__(self, "period", _positive("period", self.period))
-        object.__setattr__(self, "step_length", _positive("step_length", self.step_length))
-        object.__setattr__(self, "speed", _positive("speed", self.speed))
-        if self.period is not None and self.step_length is not None and self.speed is not None:
-            if abs(self.step_length * self.steps / self.period - self.speed) > 1e-12 * self.speed:
-                raise GaitoptInputError(
-                    f"`speed` {self.speed:g} contradicts step_length/period = "
-                    f"{self.step_length * self.steps / self.period:g}; fix at most two of them"
-                )
-        clearance = float(self.clearance) if isinstance(self.clearance, (int, float)) else -1.0
-        if not (math.isfinite(clearance) and clearance >= 0):
-            raise GaitoptInputError(
-                f"`clearance` must be a finite length >= 0 (m), got {self.clearance!r}; "
-                f"e.g. clearance=0.01"
-            )
-        object.__setattr__(self, "clearance", clearance)
-        margin = float(self.guard_margin) if isinstance(self.guard_margin, (int, float)) else -1.0
-        if not (math.isfinite(margin) and margin >= 0):
-            raise GaitoptInputError(
-                f"`guard_margin` must be a finite number >= 0 (the guard's unit), got "
-                f"{self.guard_margin!r}; e.g. guard_margin=0.05"
-            )
-        object.__setattr__(self, "guard_margin", margin)
-        if not isinstance(self.continuous_inputs, bool):
-            raise GaitoptInputError(
-                f"`continuous_inputs` must be True or False, got {self.continuous_inputs!r}"
-            )
-        states = all_state_names(model)
-        if not isinstance(self.bounds, Mapping):
-            raise GaitoptInputError(
-                f"`bounds` must be a mapping {{input: max}} or {{input: (low, high)}}, got "
-                f"{self.bounds!r:.80}; e.g. bounds={{{(model.inputs or ('u',))[0]!r}: 20}}"
-            )
-        for name, value in dict(self.bounds).items():
-            if name not in model.inputs and name in states:
-                raise GaitoptInputError(
-                    f"`bounds` names {name!r}, a state of {model.name}, not an input; bound "
-                    f"states with state_bounds, e.g. state_bounds={{{name!r}: (-1.0, 1.0)}}"
-                )
-            if name not in model.inputs:
-                raise GaitoptInputError(
-                    f"`bounds` names unknown input {name!r}; {did_you_mean(name, model.inputs)}"
-                    f"{model.name}'s inputs: {', '.join(model.inputs)}"
-                )
-            _bound_pair(name, value)
-        if not isinstance(self.state_bounds, Mapping):
-            raise GaitoptInputError(
-                f"`state_bounds` must be a mapping {{state: (low, high)}}, got "
-                f"{self.state_bounds!r:.80}; e.g. state_bounds={{{states[0]!r}: (-1.0, 1.0)}}"
-            )
-        checked = {}
-        for name, pair in dict(self.state_bounds).items():
-            if name not in states:
-                also = (
-                    f"; {name!r} is an input: bound it with bounds" if name in model.inputs else ""
-                )
-                raise GaitoptInputError(
-                    f"`state_bounds` names unknown state {name!r}{also}; "
-                    f"{did_you_mean(name, states)}{model.name}'s states: {', '.join(states)}"
-                )
-            checked[name] = _state_pair(name, pair)
-        object.__setattr__(self, "state_bounds", checked)
-        paths = _names("path_constraints", self.path_constraints, "('knee_flexion',)")
-        declared = declared_limits(model)
-        for name in paths:
-            if name not in declared:
-                have = (
-                    f"{model.name}'s limits: {', '.join(declared)}"
-                    if declared
-                    else f"{model.name} declares none (Phase.limits)"
-                )
-                raise GaitoptInputError(
-                    f"`path_constraints` names unknown limit {name!r}; "
-                    f"{did_you_mean(name, declared) if declared else ''}{have}"
-                )
-        if len(set(paths)) != len(paths):
-            raise GaitoptInputError(
-                f"`path_constraints` names a limit twice: {', '.join(paths)}; name each once"
-            )
-        object.__setattr__(self, "path_constraints", paths)
-        params = model.params
-        free = _names("free", self.free, "('slope',)")
-        if len(set(free)) != len(free):
-            raise GaitoptInputError(
-                f"`free` names a parameter twice: {', '.join(free)}; name each once"
-            )
-        for name in free:
-            if name not in params:
-                raise GaitoptInputError(
-                    f"`free` names unknown parameter {name!r}; {did_you_mean(name, params)}"
-                    f"{model.name}'s parameters: {', '.join(params)}"
-                )
-        object.__setattr__(self, "free", free)
-        if self.cost in ("work", "cot") or self.step_length or self.speed:
-            if self.footholds() is None:
-                raise GaitoptInputError(
-                    f"{model.name} declares no foothold, so step length, speed and cost of "
-                    f"transport are undefined; leave them free and use cost='effort'"
-                )
-        self._check_not_standing()
-        bound, budget = check_max_multiplier(self)
-        object.__setattr__(self, "max_multiplier", bound)
-        object.__setattr__(self, "max_roughness", budget)
+        # Each check raises a one-line GaitoptInputError (gaitopt.optimize.statement), in this
+        # order: the first wrong argument is the one named.
+        def set_(name: str, value: Any) -> None:
+            object.__setattr__(self, name, value)
 
-    def _check_not_standing(self) -> None:
-        """A walker on level ground with nothing fixed has no optimal gait: gravity does no work
-        over a step, so every step costs effort (or positive work) to replace what the heel
-        strike loses, and the shorter and slower the step the less; the infimum, 0, is standing
-        still, which is no gait.  The optimiser would shrink the step towards it (at slope
-        1e-12 the compass gait's ended at 4 mm after about a minute, its refinement never
-        settling; the five-link biped's at a 4 cm shuffle of effort 2.4e-5 N²·m²·s, against
-        263.7 for OptimTraj's 0.4 m step), so the statement is refused before any work.  Not
-        for the cost of transport (per distance) or a user's cost, nor when the slope is free
-        (a passive gait downhill costs nothing)."""
-        model = self.model
-        if self.cost not in ("effort", "work") or self.footholds() is None:
-            return
-        if self.period is not None or self.step_length is not None or self.speed is not None:
-            return
-        if "slope" not in model.params or "slope" in self.free or model.params["slope"] != 0:
-            return
-        what = "effort" if self.cost == "effort" else "positive work"
-        low, high = self.input_bounds()
-        impulses = [model.inputs[j] for j in self.impulsive_index if low[j] < 0 or high[j] > 0]
-        also = (
-            f" (and every gait {' and '.join(impulses)} alone powers: the effort leaves "
-            f"impulses out)"
-            if impulses and self.cost == "effort"
-            else ""
-        )
-        default = next(sp.default for sp in model.parameter_specs() if sp.name == "slope")
-        downhill = (
-            f", or walk down a slope, e.g. gaitopt.model({model.name!r}, slope={default:g})"
-            if model.passive_gait and default > 0
-            else ""
-        )
-        raise GaitoptInputError(
-            f"{model.name} on level ground (slope=0) with no `period`, `step_length` or `speed` "
-            f"given has no optimal gait: the least {what} is 0, reached by standing still"
-            f"{also}, and the optimiser would only shrink the step towards it; fix a step "
-            f"length, period or speed, e.g. step_length=0.3 and period=0.8{downhill}"
-        )
+        check_model(self.model)
+        check_cost(self.model, self.cost, self.bounds)
+        set_("steps", check_count("steps", self.steps, 1, MAX_STEPS, WHY_STEPS))
+        lengths = check_lengths(self.period, self.step_length, self.speed, self.steps)
+        for name, value in zip(("period", "step_length", "speed"), lengths, strict=True):
+            set_(name, value)
+        clearance, margin = check_margins(self.clearance, self.guard_margin,
+                                          self.continuous_inputs)  # fmt: skip
+        set_("clearance", clearance)
+        set_("guard_margin", margin)
+        check_bounds(self.model, self.bounds)
+        set_("state_bounds", check_state_bounds(self.model, self.state_bounds))
+        set_("path_constraints", check_path_constraints(self.model, self.path_constraints))
+        set_("free", check_free(self.model, self.free))
+        check_footholds(self)
+        check_not_standing(self)
+        bound, budget = check_max_multiplier(self)
+        set_("max_multiplier", bound)
+        set_("max_roughness", budget)
 
     # -- names and sizes ---------------------------------------------------------------------
     @property
@@ -449,7 +255,7 @@ class GaitProblem:
         :attr:`~gaitopt.HybridModel.input_bounds` (``±inf`` where unbounded)."""
         model = self.model
         pairs = [
-            _bound_pair(n, self.bounds[n]) if n in self.bounds else (-np.inf, np.inf)
+            bound_pair(n, self.bounds[n]) if n in self.bounds else (-np.inf, np.inf)
             for n in model.inputs
         ]
         low = np.array([a for a, _ in pairs], dtype=float)
@@ -577,41 +383,6 @@ class GaitProblem:
             **({} if self.max_multiplier is None else {"max_multiplier": self.max_multiplier}),
             **({} if self.max_roughness is None else {"max_roughness": self.max_roughness}),
         }
-
-
-def all_state_names(model: HybridModel) -> tuple[str, ...]:
-    """Every phase's state names, once each, in order of first appearance."""
-    return tuple(dict.fromkeys(n for phase in model.phases for n in phase.states))
-
-
-def declared_limits(model: HybridModel) -> tuple[str, ...]:
-    """Names of the limits the model's phases declare (:attr:`gaitopt.hybrid.Phase.limits`)."""
-    return tuple(dict.fromkeys(n for phase in model.phases for n in phase.limits))
-
-
-def _state_pair(name: str, pair: Any) -> tuple[float, float]:
-    """``state_bounds[name]`` as ``(low, high)``: two numbers, ``low < high``, not both infinite."""
-    try:
-        low, high = (float(v) for v in pair)
-    except (TypeError, ValueError):
-        low = high = math.nan
-    if (
-        math.isnan(low)
-        or math.isnan(high)
-        or not low < high
-        or low == math.inf
-        or (high == -math.inf)
-    ):
-        raise GaitoptInputError(
-            f"`state_bounds[{name!r}]` must be a pair (low, high) of numbers with low < high "
-            f"(one side may be infinite), got {pair!r}; e.g. state_bounds={{{name!r}: (-1.0, 1.0)}}"
-        )
-    if math.isinf(low) and math.isinf(high):
-        raise GaitoptInputError(
-            f"`state_bounds[{name!r}]` = {pair!r} bounds nothing; give a finite side, e.g. "
-            f"state_bounds={{{name!r}: (0.0, math.inf)}}, or leave {name!r} out"
-        )
-    return low, high
 
 
 def as_problem(model: HybridModel, **kwargs: Any) -> GaitProblem:

@@ -18,10 +18,11 @@ from typing import Any
 
 import numpy as np
 
-from ..arguments import check_count, check_positive, check_scheduler
+from ..arguments import check_count, check_positive
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
 from ..threads import single_blas_thread
+from ..workers import Map, check_workers, worker_map
 from .active import _active
 from .arcs import _describe, describe_bounds, detect_bound_arcs, detect_structure, structure_of
 from .attempt import (
@@ -37,7 +38,7 @@ from .problem import _WHY_STEPS, MAX_STEPS, GaitProblem, as_problem
 from .result import Minimum, OptimalGait, StartRecord
 from .spectral_bound import with_roughness_budget
 from .spectral_certify import certify_spectral
-from .starts import dask_starts
+from .starts import mapped_starts
 from .state_arcs import detect_touches
 
 __all__ = [
@@ -87,6 +88,7 @@ def optimize_gait(
     tol: float = 1e-8,
     verify: bool = True,
     guess: OptimalGait | None = None,
+    workers: int | Map = 1,
     scheduler: str | None = None,
     max_multiplier: float | None = None,
     max_roughness: float | None = None,
@@ -140,10 +142,15 @@ def optimize_gait(
     guess : OptimalGait, optional
         A previous optimum to warm start from (a library of gaits): a result with an orbit of
         the same model and steps (a certified optimum, or a converged one its checks rejected).
+    workers : int or callable
+        What runs the starts (:func:`gaitopt.workers.worker_map`): ``1`` (default) serially in
+        this process, ``n`` a pool of ``n`` processes (``-1``: one per CPU), or a map-like
+        ``workers(func, iterable)``; other than 1, each start is sent as plain data
+        (:func:`gaitopt.optimize.starts.mapped_starts`).  The minima and the refined optimum
+        are those of the serial run.
     scheduler : str, optional
-        Run the starts on Dask (``"local"``: a local cluster; or a scheduler address), as
-        :func:`gaitopt.sweep.sweep` does (:func:`gaitopt.optimize.starts.dask_starts`); the
-        minima and the refined optimum are those of the serial run.  Default: serially.
+        Run the starts on Dask instead (``"local"``: a local cluster; or a scheduler address):
+        an adapter onto a Dask-backed map (:func:`gaitopt.sweep.dask_map`).
     max_multiplier : float, optional
         Bound ``R > 0`` on the spectral radius of the return map's Jacobian ``A`` (section
         coordinates, the input a feedforward in the time since the section), imposed inside the
@@ -184,7 +191,7 @@ def optimize_gait(
         (:class:`~gaitopt.optimize.guess.WarmStartError`).
     """
     _check_counts(steps=steps, starts=starts, seed=seed, mesh=mesh, tol=tol, verify=verify)
-    check_scheduler(scheduler)
+    check_workers(workers, scheduler)
     problem = as_problem(
         model,
         cost=cost,
@@ -208,6 +215,7 @@ def optimize_gait(
         tol=tol,
         verify=verify,
         guess=guess,
+        workers=workers,
         scheduler=scheduler,
     )
 
@@ -304,6 +312,7 @@ def solve_problem(
     tol: float = 1e-8,
     verify: bool = True,
     guess: OptimalGait | None = None,
+    workers: int | Map = 1,
     scheduler: str | None = None,
 ) -> OptimalGait:
     """Solve a :class:`GaitProblem` (see :func:`optimize_gait`: the same arguments, the same
@@ -316,11 +325,14 @@ def solve_problem(
         )
     _check_counts(steps=problem.steps, starts=starts, seed=seed, mesh=mesh, tol=tol,
                   verify=verify)  # fmt: skip
-    if scheduler is not None and problem.path_constraints:  # workers rebuild without them
+    check_workers(workers, scheduler)
+    elsewhere = scheduler is not None or workers != 1
+    if elsewhere and problem.path_constraints:  # workers rebuild without them
+        which = "`scheduler`" if scheduler is not None else "`workers`"
         raise GaitoptInputError(
-            f"`scheduler` does not carry `path_constraints` "
+            f"{which} does not carry `path_constraints` "
             f"({', '.join(problem.path_constraints)}) to its workers yet; run the starts "
-            f"serially (scheduler=None)"
+            f"serially (workers=1, scheduler=None)"
         )
     check_warm_start(problem, guess)
     longest = problem.model.max_step_length()
@@ -340,7 +352,7 @@ def solve_problem(
     problem, unbounded, failure = with_roughness_budget(
         problem,
         lambda q: solve_problem(q, starts=starts, seed=seed, mesh=mesh, tol=tol, verify=verify,
-                                guess=guess, scheduler=scheduler),
+                                guess=guess, workers=workers, scheduler=scheduler),
     )  # fmt: skip
     if failure is not None:
         return failure
@@ -351,8 +363,9 @@ def solve_problem(
     indices = _start_indices(starts)
     seed = int(seed)
     col = _collocation(problem, mesh)
-    if scheduler is not None:  # the same attempts, on Dask workers
-        runs = dask_starts(problem, mesh, indices, seed, scheduler, guess)
+    if elsewhere:  # the same attempts, by the workers' map
+        with worker_map(workers, scheduler) as run:
+            runs = mapped_starts(problem, mesh, indices, seed, run, guess)
     else:
         runs = [attempt(col, problem, start, seed, guess) for start in indices]
 

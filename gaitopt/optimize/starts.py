@@ -1,8 +1,10 @@
-"""Multi-starts on Dask (:func:`gaitopt.sweep.sweep`): the problem as plain data, rebuilt in
-each worker from the registered model and its parameters (:func:`problem_data`,
-:func:`problem_from`); :func:`start_task` runs one :func:`~gaitopt.optimize.attempt.attempt` and
-returns plain data.  Used by :func:`gaitopt.optimize.solve.optimize_gait` and the libraries'
-workers (:mod:`gaitopt.optimize.library.workers`)."""
+"""Multi-starts in other processes, by a map (``workers=``, :mod:`gaitopt.workers`): the problem
+as plain data, rebuilt in each worker from the registered model and its parameters
+(:func:`problem_data`, :func:`problem_from`); :func:`start_task` runs one
+:func:`~gaitopt.optimize.attempt.attempt` and returns plain data; :func:`mapped_starts` sends
+the starts through whatever map it is given (a process pool, a Dask-backed map, a caller's).
+Used by :func:`gaitopt.optimize.solve.optimize_gait` and the libraries' workers
+(:mod:`gaitopt.optimize.library.workers`)."""
 
 from __future__ import annotations
 
@@ -14,13 +16,13 @@ import numpy as np
 
 from ..errors import GaitoptInputError
 from ..models import model as make_model
-from ..sweep import sweep
+from ..workers import Map, worker_map
 from .attempt import attempt
 from .collocation import Collocation, RadauMesh
 from .problem import GaitProblem
 from .result import OptimalGait
 
-__all__ = ["problem_data", "problem_from", "start_task", "dask_starts"]
+__all__ = ["problem_data", "problem_from", "start_task", "mapped_starts", "dask_starts"]
 
 
 def problem_data(problem: GaitProblem) -> dict[str, Any]:
@@ -80,7 +82,7 @@ _WORKER_TRANSCRIPTIONS: dict[str, Collocation] = {}
 
 
 def start_task(point: Mapping[str, Any]) -> dict[str, Any]:
-    """Dask task: one start of a multi-start (:func:`gaitopt.optimize.solve.attempt`) on the
+    """Worker task: one start of a multi-start (:func:`gaitopt.optimize.solve.attempt`) on the
     initial mesh; the transcription is built once per worker process and problem."""
     key = json.dumps([point["problem"], point["mesh"]], sort_keys=True)
     col = _WORKER_TRANSCRIPTIONS.get(key)
@@ -109,37 +111,37 @@ def start_task(point: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
-def dask_starts(
+def mapped_starts(
     problem: GaitProblem,
     mesh: RadauMesh,
     indices: Sequence[int],
     seed: int,
-    scheduler: str,
+    run: Map,
     guess: OptimalGait | None = None,
 ) -> list[dict[str, Any]]:
-    """The starts of a multi-start on Dask (:func:`gaitopt.sweep.sweep`), in start order, as
+    """The starts of a multi-start by the map ``run`` (``run(start_task, points)``, e.g. of
+    :func:`gaitopt.workers.worker_map`), in start order, as
     :func:`gaitopt.optimize.solve.attempt` returns them.
 
     Parameters
     ----------
-    scheduler : str
-        ``"serial"``, ``"local"`` (a local cluster of 2 processes) or a scheduler address.
+    run : callable
+        A map-like ``run(func, iterable)`` returning the results in order.
     guess : OptimalGait, optional
         Not supported (a warm start stays in this process): an error.
     """
     if guess is not None:
         raise GaitoptInputError(
-            "`scheduler` with `guess`: a warm start is not sent to Dask workers; run it without "
-            "a scheduler"
+            "`workers`/`scheduler` with `guess`: a warm start is not sent to other processes; "
+            "run it serially (workers=1, no scheduler)"
         )
     data = problem_data(problem)
     points = [
         {"problem": data, "mesh": [mesh.intervals, mesh.degree], "start": int(i), "seed": seed}
         for i in indices
     ]
-    result = sweep(start_task, points, scheduler=scheduler, progress=False, description="starts")
     runs = []
-    for r in result.results:
+    for r in run(start_task, points):
         entry = dict(r)
         entry["w"] = np.array([np.nan if v is None else v for v in r["w"]], dtype=float)
         if entry["ok"]:
@@ -148,3 +150,18 @@ def dask_starts(
             entry["violation"] = (r["violation"][0], float(r["violation"][1] or np.inf))
         runs.append(entry)
     return runs
+
+
+def dask_starts(
+    problem: GaitProblem,
+    mesh: RadauMesh,
+    indices: Sequence[int],
+    seed: int,
+    scheduler: str,
+    guess: OptimalGait | None = None,
+) -> list[dict[str, Any]]:
+    """:func:`mapped_starts` on Dask (``"local"`` or a scheduler address;
+    :func:`gaitopt.sweep.dask_map`), or ``"serial"``: in this process, through the same data."""
+    workers, scheduler = (1, None) if scheduler == "serial" else (1, scheduler)
+    with worker_map(workers, scheduler) as run:
+        return mapped_starts(problem, mesh, indices, seed, run, guess)

@@ -21,7 +21,7 @@ __all__ = [
     "cost_unit",
 ]
 
-_RATE_SUFFIX = "_dot"
+RATE_SUFFIX = "_dot"
 
 
 def coordinate_pairs(states: tuple[str, ...] | list[str]) -> list[str]:
@@ -30,7 +30,7 @@ def coordinate_pairs(states: tuple[str, ...] | list[str]) -> list[str]:
     >>> coordinate_pairs(("stance", "swing", "stance_dot", "swing_dot"))
     ['stance', 'swing']
     """
-    return [q for q in states if not q.endswith(_RATE_SUFFIX) and q + _RATE_SUFFIX in states]
+    return [q for q in states if not q.endswith(RATE_SUFFIX) and q + RATE_SUFFIX in states]
 
 
 def state_unit(model: HybridModel, name: str) -> str | None:
@@ -39,8 +39,8 @@ def state_unit(model: HybridModel, name: str) -> str | None:
     units = dict(model.state_units)
     if name in units:
         return units[name]
-    if name.endswith(_RATE_SUFFIX) and name[: -len(_RATE_SUFFIX)] in units:
-        base, time = units[name[: -len(_RATE_SUFFIX)]], model.time_unit
+    if name.endswith(RATE_SUFFIX) and name[: -len(RATE_SUFFIX)] in units:
+        base, time = units[name[: -len(RATE_SUFFIX)]], model.time_unit
         return base if time == "1" and base == "1" else f"{base}/{time}"
     return None
 
@@ -79,7 +79,7 @@ def time_axis_label(model: HybridModel, since: str = "the section") -> str:
 def is_rate(model: HybridModel, name: str) -> bool:
     """Whether state ``name`` is a rate: ``q_dot`` of a state ``q``, or a partner the model names
     in :attr:`HybridModel.rates` (the line juggler's ``v``)."""
-    return name.endswith(_RATE_SUFFIX) or name in model.rates.values()
+    return name.endswith(RATE_SUFFIX) or name in model.rates.values()
 
 
 def state_quantity(model: HybridModel, name: str) -> str:

@@ -12,7 +12,7 @@ from ..errors import GaitoptInputError
 from ..hybrid import HybridModel, Transition
 from ..result import LimitCycle
 from ..simulation import Simulation
-from .labels import _RATE_SUFFIX, coordinate_pairs, state_unit, time_label, unit_label
+from .labels import RATE_SUFFIX, coordinate_pairs, state_unit, time_label, unit_label
 
 __all__ = ["plot_phase_portrait"]
 
@@ -93,12 +93,12 @@ def plot_phase_portrait(
         pairs = declared + [
             q
             for q in coordinate_pairs(arc.states)
-            if q not in model.rates and q + _RATE_SUFFIX not in held
+            if q not in model.rates and q + RATE_SUFFIX not in held
         ]
         names += [q for q in pairs if q not in names and q not in held]
     if not names:
         raise GaitoptInputError(
-            f"{model.name}: no state q has a rate q{_RATE_SUFFIX} in the orbit's states "
+            f"{model.name}: no state q has a rate q{RATE_SUFFIX} in the orbit's states "
             f"{arcs[0].states}; the phase portrait needs such pairs"
         )
     _RATE.clear()
@@ -138,7 +138,7 @@ def plot_phase_portrait(
 
 
 def _pairs_in(states: tuple[str, ...], group: tuple[str, ...]) -> list[str]:
-    return [q for q in group if q in states and _RATE.get(q, q + _RATE_SUFFIX) in states]
+    return [q for q in group if q in states and _RATE.get(q, q + RATE_SUFFIX) in states]
 
 
 # Rate partner of each coordinate for the portrait being drawn: the model's declared
@@ -147,7 +147,7 @@ _RATE: dict[str, str] = {}
 
 
 def _rate(q: str) -> str:
-    return _RATE.get(q, q + _RATE_SUFFIX)
+    return _RATE.get(q, q + RATE_SUFFIX)
 
 
 def _draw_portrait(

@@ -10,13 +10,16 @@ The problem and the methods are separate modules:
   certificate of :mod:`gaitopt.orbit` on the RK samples), and its multipliers;
 * :mod:`~gaitopt.shooting.verify` — the independent simulation (the common referee);
 * :mod:`~gaitopt.shooting.gait` — the direct solve from a guess (:func:`solve_gait` on the
-  unknowns), below the homotopy and multi-start of :mod:`gaitopt.homotopy`;
-* :mod:`~gaitopt.shooting.find` — :func:`find_limit_cycle`, which puts them together, and
-  :func:`solve_task`, its sweep task.
+  unknowns), below the homotopy and multi-start of :mod:`gaitopt.homotopy`.
+
+:func:`find_limit_cycle`, which chooses among them, and :func:`solve_task`, its sweep task, live
+above this package in :mod:`gaitopt.search`; they are re-exported here for the older import path
+(nothing in this package imports them, so no circle).
 """
 
+from ..search import find_limit_cycle, solve_task
 from .certify import certify, check_constraints
-from .find import find_limit_cycle, solve_gait, solve_task
+from .gait import solve_gait
 from .newton import METHODS, Solution
 from .problem import MultipleShooting, ShootingProblem, shooting_problem
 from .verify import verify_by_simulation

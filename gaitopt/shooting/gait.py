@@ -1,10 +1,10 @@
-"""A gait from a guess: the direct solve below :func:`~gaitopt.shooting.find.find_limit_cycle`
+"""A gait from a guess: the direct solve below :func:`~gaitopt.search.find_limit_cycle`
 — the argument checks, the guess (a simulation or a previous orbit), the solve on the
 :class:`~gaitopt.shooting.problem.ShootingProblem` (:func:`solve_gait`: mesh refinement until
 the discretisation error is below the tolerance, and
 :func:`~gaitopt.shooting.certify.certify`), and the record of a search that found nothing
 (:func:`failed`).  No homotopy, no multi-start: those (:mod:`gaitopt.homotopy`) call this, and
-:func:`~gaitopt.shooting.find.find_limit_cycle` puts them together."""
+:func:`~gaitopt.search.find_limit_cycle` puts them together."""
 
 from __future__ import annotations
 
@@ -50,7 +50,7 @@ def check_arguments(
     tol: float,
     scheduler: str | None = None,
 ) -> tuple[HybridModel, int, float, np.ndarray]:
-    """The checks of :func:`~gaitopt.shooting.find.find_limit_cycle`'s arguments, before any
+    """The checks of :func:`~gaitopt.search.find_limit_cycle`'s arguments, before any
     work (bad input fails fast): the model (a name is looked up), ``steps``, ``tol`` and the
     inputs as they are used; raises :class:`~gaitopt.errors.GaitoptInputError` (a
     :class:`~gaitopt.errors.GuessError` for an explicit guess the model cannot start from)."""
@@ -103,7 +103,7 @@ def direct_solve(
     verify: bool = True,
     tol: float = 1e-10,
 ) -> LimitCycle:
-    """:func:`~gaitopt.shooting.find.find_limit_cycle` with ``follow=False`` and one start: the
+    """:func:`~gaitopt.search.find_limit_cycle` with ``follow=False`` and one start: the
     solve from the guess itself (a simulation of ``steps`` returns from the section point, the
     default start when ``guess`` is None, or a previous orbit's nodes), the arguments as there."""
     start = time.perf_counter()
@@ -183,7 +183,7 @@ def solve_gait(
     """Solve ``problem`` from the unknowns ``w0`` at ``model``'s parameters, refine the mesh
     until the discretisation error is below ``tol``, and certify the orbit.
 
-    The part of :func:`~gaitopt.shooting.find.find_limit_cycle` after the guess, for callers
+    The part of :func:`~gaitopt.search.find_limit_cycle` after the guess, for callers
     that build the unknowns themselves (branch switching at a period doubling, warm starts).
 
     Parameters
@@ -197,57 +197,27 @@ def solve_gait(
     u : numpy.ndarray
         Per-step inputs.
     method, verify, tol
-        As :func:`~gaitopt.shooting.find.find_limit_cycle`.
+        As :func:`~gaitopt.search.find_limit_cycle`.
     start : float, optional
         ``time.perf_counter()`` when the search began (for ``solve_time``).
 
     Returns
     -------
     LimitCycle
-        As :func:`~gaitopt.shooting.find.find_limit_cycle`.
+        As :func:`~gaitopt.search.find_limit_cycle`.
     """
     start = time.perf_counter() if start is None else start
     steps = problem.cycles
-    disc = problem.disc
     p = model.p
 
     def fail(message: str, status: str, **extra: Any) -> LimitCycle:
         return failed(model, steps, u, start, message, status, **extra)
 
     # -- solve, then refine the mesh until the discretisation error is below tol ---------------
-    refinements, disc_error, singular = 0, float("nan"), False
-    while True:
-        solution = problem.solve(w0, u, p, method=method)
-        w, converged, iterations, ev = (
-            solution.w, solution.converged, solution.iterations, solution.evaluation,
-        )  # fmt: skip
-        # One Jacobian per Newton step: the last one (at the solution) serves the error
-        # estimate, the multipliers and the input Jacobian.
-        ev = ev if ev is not None else problem.evaluate(w, u, p)
-        F, F_w = ev.F, ev.F_w
-        # Newton's own stopping test (abstol 1e-12) is stricter than `tol`: a point that meets
-        # `tol` is accepted (and certified) even where Newton stalled just above its abstol.
-        # A "converged" point where the equations are not even finite (e.g. a negative duration
-        # reached by the line search) is no solution.
-        finite = bool(np.all(np.isfinite(F_w)) and np.all(np.isfinite(F)))
-        converged = finite and (converged or float(np.max(np.abs(F))) <= tol)
-        if not converged:
-            break
-        try:
-            correction = problem.newton_step(F_w, problem.fine_residual(w, u, p))
-        except np.linalg.LinAlgError:  # a singular shooting Jacobian: not an isolated orbit
-            converged, singular = False, True
-            break
-        disc_error = float(np.max(np.abs(correction)))
-        # The finest mesh is bounded in absolute terms (not only per call), so that a chain of
-        # warm starts (homotopy, libraries) cannot compound refinements without limit.
-        finest = type(model).mesh[1] * _MAX_MESH_FACTOR
-        if disc_error <= tol or refinements == _MAX_REFINEMENTS or 2 * disc.rk_steps > finest:
-            break
-        disc = disc.refined()
-        problem, w0 = shooting_problem(type(model), disc, steps), w + correction
-        refinements += 1
-
+    problem, w, ev, converged, singular, iterations, disc_error, refinements = _refined_solution(
+        model, problem, w0, u, method, tol
+    )
+    F, F_w = ev.F, ev.F_w
     residual = float(np.max(np.abs(F))) if np.all(np.isfinite(F)) else float("inf")
     durations = np.asarray(ev.durations, dtype=float).ravel()
     # A period only where it means something: every phase duration positive and finite.
@@ -337,6 +307,57 @@ def solve_gait(
     )
 
 
+def _refined_solution(
+    model: HybridModel,
+    problem: ShootingProblem,
+    w0: np.ndarray,
+    u: np.ndarray,
+    method: str,
+    tol: float,
+) -> tuple[ShootingProblem, np.ndarray, Any, bool, bool, int, float, int]:
+    """Solve from ``w0``, then double the RK steps and re-solve (warm) while the discretisation
+    error estimate — one Newton correction towards twice the steps — exceeds ``tol`` (at most
+    :data:`_MAX_REFINEMENTS` times, and no finer than :data:`_MAX_MESH_FACTOR` times the model's
+    mesh).  Returns the last problem, its unknowns ``w`` and evaluation at ``w``, whether it
+    converged, whether its Jacobian was singular, Newton's iterations, the error estimate (NaN
+    where it was not reached) and the number of refinements."""
+    steps, disc, p = problem.cycles, problem.disc, model.p
+    refinements, disc_error, singular = 0, float("nan"), False
+    while True:
+        solution = problem.solve(w0, u, p, method=method)
+        w, converged, iterations, ev = (
+            solution.w, solution.converged, solution.iterations, solution.evaluation,
+        )  # fmt: skip
+        # One Jacobian per Newton step: the last one (at the solution) serves the error
+        # estimate, the multipliers and the input Jacobian.
+        ev = ev if ev is not None else problem.evaluate(w, u, p)
+        F, F_w = ev.F, ev.F_w
+        # Newton's own stopping test (abstol 1e-12) is stricter than `tol`: a point that meets
+        # `tol` is accepted (and certified) even where Newton stalled just above its abstol.
+        # A "converged" point where the equations are not even finite (e.g. a negative duration
+        # reached by the line search) is no solution.
+        finite = bool(np.all(np.isfinite(F_w)) and np.all(np.isfinite(F)))
+        converged = finite and (converged or float(np.max(np.abs(F))) <= tol)
+        if not converged:
+            break
+        try:
+            correction = problem.newton_step(F_w, problem.fine_residual(w, u, p))
+        except np.linalg.LinAlgError:  # a singular shooting Jacobian: not an isolated orbit
+            converged, singular = False, True
+            break
+        disc_error = float(np.max(np.abs(correction)))
+        # The finest mesh is bounded in absolute terms (not only per call), so that a chain of
+        # warm starts (homotopy, libraries) cannot compound refinements without limit.
+        finest = type(model).mesh[1] * _MAX_MESH_FACTOR
+        if disc_error <= tol or refinements == _MAX_REFINEMENTS or 2 * disc.rk_steps > finest:
+            break
+        disc = disc.refined()
+        problem, w0 = shooting_problem(type(model), disc, steps), w + correction
+        refinements += 1
+
+    return problem, w, ev, converged, singular, iterations, disc_error, refinements
+
+
 def failed(model, steps: int, u, start: float, message: str, status: str, **extra) -> LimitCycle:
     """The record of a search that found no gait: ``message`` (with the model's note on where its
     gait exists) and ``status`` (one of :data:`gaitopt.result.STATUS`)."""
@@ -357,7 +378,7 @@ def failed(model, steps: int, u, start: float, message: str, status: str, **extr
 
 def gait_task(point: Mapping[str, Any], solve: Callable[..., LimitCycle]) -> dict[str, Any]:
     """A limit cycle at a sweep point, by ``solve`` (:func:`direct_solve` or
-    :func:`~gaitopt.shooting.find.find_limit_cycle`): ``{"model": name, "params": {...},
+    :func:`~gaitopt.search.find_limit_cycle`): ``{"model": name, "params": {...},
     "guess": {...} | None, "steps": k}`` → success, period, fixed point, multipliers,
     max |multiplier|, stable."""
     from ..models import model as make_model
@@ -380,5 +401,5 @@ def gait_task(point: Mapping[str, Any], solve: Callable[..., LimitCycle]) -> dic
 
 def direct_task(point: Mapping[str, Any]) -> dict[str, Any]:
     """:func:`gait_task` by :func:`direct_solve` (the multi-start's sweep task: its guesses are
-    section points, which :func:`~gaitopt.shooting.find.find_limit_cycle` solves directly)."""
+    section points, which :func:`~gaitopt.search.find_limit_cycle` solves directly)."""
     return gait_task(point, direct_solve)

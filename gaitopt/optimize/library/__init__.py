@@ -20,16 +20,17 @@ the optimum).  Between neighbours it compares:
 The library is checked against cold starts (the model's default start, no warm start) at a few
 points: the same optimal cost to ``1e-8`` relative, else the library has followed another local
 minimum and says so.  The cold starts, and the starts of a multi-start
-(:func:`dask_starts`, ``optimize_gait(..., scheduler=...)``), can run on Dask through
-:func:`gaitopt.sweep.sweep`: each worker rebuilds the problem from plain data (registered model
-and parameters) and returns plain data.
+(:func:`~gaitopt.optimize.starts.mapped_starts`, ``optimize_gait(..., workers=...)``), can run
+in other processes by any map (``workers=``: a process pool, a caller's map, or Dask through
+``scheduler=``; :mod:`gaitopt.workers`): each worker rebuilds the problem from plain data
+(registered model and parameters) and returns plain data.
 
 Modules: :mod:`~gaitopt.optimize.library.records` (the quantities a library can vary, its points,
 events and cold-start checks, and their JSON), :mod:`~gaitopt.optimize.library.walk` (the walk
 along the values: :func:`gait_library`), :mod:`~gaitopt.optimize.library.events` (the reduced
 Hessian, and active-set changes, folds and ends located by bisection),
 :mod:`~gaitopt.optimize.library.cold` (the cold-start checks) and
-:mod:`~gaitopt.optimize.library.workers` (problems as plain data, the Dask tasks and multi-starts).
+:mod:`~gaitopt.optimize.library.workers` (problems as plain data, the tasks and multi-starts).
 """
 
 from .events import reduced_hessian

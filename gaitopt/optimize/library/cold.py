@@ -10,7 +10,7 @@ import numpy as np
 
 from ...errors import GaitoptInputError
 from ...hybrid import HybridModel
-from ...sweep import sweep
+from ...workers import Map, worker_map
 from ..problem import as_problem
 from .records import CONSTRAINTS, ColdCheck, GaitLibrary
 from .workers import cold_solve, cold_task, problem_data
@@ -52,9 +52,11 @@ def cold_checks(
     cost: str,
     options: Mapping[str, Any],
     scheduler: str | None,
+    workers: int | Map = 1,
 ) -> list[ColdCheck]:
-    """One :class:`ColdCheck` per value: the problem there solved cold (on Dask when
-    ``scheduler`` is given), its cost against the library's nearest point."""
+    """One :class:`ColdCheck` per value: the problem there solved cold (by the ``workers`` map,
+    or on Dask when ``scheduler`` is given: :func:`gaitopt.workers.worker_map`), its cost
+    against the library's nearest point."""
     if not values:
         return []
     by_value = {pt.value: pt for pt in library.points}
@@ -67,9 +69,10 @@ def cold_checks(
                 as_problem(model.replace(**{vary: v}), cost=cost, **fixed, **_opts(options))
             )
     tol = float(options["tol"])
-    if scheduler is not None:
+    if scheduler is not None or workers != 1:  # in other processes: the problems as data
         points = [{"problem": problem_data(p), "tol": tol} for p in problems]
-        outcomes = sweep(cold_task, points, scheduler=scheduler, progress=False).results
+        with worker_map(workers, scheduler) as run:
+            outcomes = list(run(cold_task, points))
     else:
         outcomes = [cold_solve(p, tol) for p in problems]
     checks = []

@@ -12,6 +12,7 @@ import numpy as np
 from ...errors import GaitoptInputError, did_you_mean
 from ...hybrid import HybridModel
 from ...threads import single_blas_thread
+from ...workers import Map, check_workers
 from ..result import OptimalGait
 from ..solve import optimize_gait
 from .cold import cold_checks as _cold_checks
@@ -72,6 +73,7 @@ def gait_library(
     tol: float = 1e-8,
     cold: int | Sequence[float] = 2,
     locate: float = 1e-3,
+    workers: int | Map = 1,
     scheduler: str | None = None,
 ) -> GaitLibrary:
     """Continue an optimal gait in a constraint or parameter, warm starting each point.
@@ -93,8 +95,12 @@ def gait_library(
     locate : float
         Bisection of an event stops when its bracket is below ``locate`` times the spacing of
         the two neighbours (default 1e-3: about 10 solves per event).
+    workers : int or callable
+        What runs the cold-start checks (:func:`gaitopt.workers.worker_map`): ``1`` (default)
+        serially, ``n`` a pool of ``n`` processes, or a map-like ``workers(func, iterable)``.
     scheduler : str, optional
-        Run the cold-start checks on Dask (``"local"`` or an address; :func:`gaitopt.sweep.sweep`).
+        Run the cold-start checks on Dask instead (``"local"`` or an address;
+        :func:`gaitopt.sweep.dask_map`).
 
     Returns
     -------
@@ -103,6 +109,7 @@ def gait_library(
     t_start = time.perf_counter()
     fixed = {"period": period, "step_length": step_length, "speed": speed}
     _check_vary(model, vary, fixed)
+    check_workers(workers, scheduler)
     grid = _values(values)
     if not (isinstance(locate, (int, float)) and 0 < locate < 1):
         raise GaitoptInputError(f"`locate` must be in (0, 1), got {locate!r}; e.g. 1e-3")
@@ -138,7 +145,7 @@ def gait_library(
         elif event is not None and event.kind in ("fold", "end"):
             break  # past a fold or the end of the branch: nothing to warm start from
     library.cold_checks = _cold_checks(library, cold_values, model, vary, fixed, cost, options,
-                                       scheduler)  # fmt: skip
+                                       scheduler, workers)  # fmt: skip
     failed = [pt.value for pt in library.points if not pt.gait.success]
     disagree = [c.value for c in library.cold_checks if not c.agree]
     library.success = not failed and not disagree and len(library.points) == grid.size

@@ -1,8 +1,8 @@
-"""Libraries and multi-starts on Dask (:func:`gaitopt.sweep.sweep`): the problem as plain data,
-rebuilt in each worker from the registered model and its parameters; the tasks return plain
-data.  The multi-start's share (:func:`problem_data`, :func:`problem_from`, :func:`start_task`,
-:func:`dask_starts`) lives in :mod:`gaitopt.optimize.starts`, below the solver, and is
-re-exported here."""
+"""Libraries and multi-starts in other processes (by a ``workers=`` map, :mod:`gaitopt.workers`):
+the problem as plain data, rebuilt in each worker from the registered model and its parameters;
+the tasks return plain data.  The multi-start's share (:func:`problem_data`,
+:func:`problem_from`, :func:`start_task`, :func:`dask_starts`) lives in
+:mod:`gaitopt.optimize.starts`, below the solver, and is re-exported here."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ __all__ = ["problem_data", "problem_from", "start_task", "dask_starts", "cold_ta
 
 
 def cold_task(point: Mapping[str, Any]) -> dict[str, Any]:
-    """Dask task: a cold :func:`solve_problem` of the problem in ``point`` (cost, success,
+    """Worker task: a cold :func:`solve_problem` of the problem in ``point`` (cost, success,
     message, wall-clock time)."""
     return cold_solve(problem_from(point["problem"]), float(point["tol"]))
 
