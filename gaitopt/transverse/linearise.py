@@ -44,6 +44,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from ..orbit.sensitivity import end_values, saltation
 from .orbit import NominalOrbit, Stage, integrate_pieces, nominal_orbit
 
 __all__ = [
@@ -79,19 +80,6 @@ def frame_functions(flow: ca.Function) -> ca.Function:
     H = ca.SX.eye(n) - 2 * ca.mtimes(v, v.T) / ca.dot(v, v)
     Hdot = ca.jtimes(H, ca.vertcat(x, u), ca.vertcat(f, ud))
     return ca.Function("frame", [x, u, ud, p, a], [f, fdot, A, B, H, Hdot])
-
-
-@lru_cache(maxsize=64)
-def _jump_functions(flow: ca.Function, guard: ca.Function, reset: ca.Function) -> ca.Function:
-    """``(f, g_x, g_u, r_x, r_u)`` at a stage's end."""
-    n, n_u, n_p = flow.size1_in(0), flow.size1_in(1), flow.size1_in(2)
-    x, u, p = ca.SX.sym("x", n), ca.SX.sym("u", n_u), ca.SX.sym("p", n_p)
-    g, r = guard(x, u, p), reset(x, u, p)
-    return ca.Function(
-        "jump",
-        [x, u, p],
-        [flow(x, u, p), ca.jacobian(g, x), ca.jacobian(g, u), ca.jacobian(r, x), ca.jacobian(r, u)],
-    )
 
 
 @dataclass
@@ -299,31 +287,15 @@ def clock_monodromy(lin: TransverseLinearisation) -> np.ndarray:
                                 dense=False)  # fmt: skip
         Phi = y.reshape(m + 1, m + 1)
         nxt = lin.frames[(j + 1) % len(lin.frames)]
-        # the jump, column by column of [δx⊥; θ]
-        tr = model.phases[stage.phase].transitions[0]
-        T = stage.duration
-        end = frame.at(T)
-        ud = stage.input(float(np.nextafter(T, -np.inf)))[1]
-        f, g_x, g_u, r_x, r_u = (
-            np.asarray(v, dtype=float) for v in _jump_functions(frame.flow, tr.guard, tr.reset)(
-                end["x"], end["u"], p
-            )
-        )  # fmt: skip
-        f, g_x, g_u = f.ravel(), g_x.ravel(), g_u.ravel()
-        rate = float(g_x @ f + g_u @ ud)
+        # the jump of [δx⊥; θ] (rule 3 of gaitopt.orbit.sensitivity, θ the clock's lead)
+        tr, end, ud, ends = _stage_end(frame, model, p)
+        theta = np.zeros((1, m + 1))
+        theta[0, m] = 1.0
+        D, dt_event = saltation(ends, ud, np.hstack([end["Pi"].T, np.zeros((frame.n, 1))]), theta)
         start = nxt.at(0.0)
-        f_next = start["f"]
+        tau_next = start["f"] @ D / float(start["f"] @ start["f"])
         closes = (stage.phase == n_phases - 1) or tr.returns_to_section
-        m_next = nxt.n - 1
-        Jz = np.zeros((m_next + 1, m + 1))
-        for c in range(m + 1):
-            dx = end["Pi"].T[:, c] if c < m else np.zeros(frame.n)
-            theta = 1.0 if c == m else 0.0
-            dt = -(g_x @ dx + g_u @ ud * theta) / rate
-            D = r_x @ (dx + f * dt) + r_u @ (ud * (dt + theta))
-            tau_next = float(f_next @ D) / float(f_next @ f_next)
-            Jz[:m_next, c] = start["Pi"] @ D
-            Jz[m_next, c] = -tau_next if closes else theta + dt - tau_next
+        Jz = np.vstack([start["Pi"] @ D, -tau_next if closes else dt_event[0] - tau_next])
         step = Jz @ Phi
         M = step if M is None else step @ M
     assert M is not None
@@ -340,22 +312,21 @@ def monodromy(transitions: list[np.ndarray], jumps: list[np.ndarray]) -> np.ndar
 
 def _jump(orbit: NominalOrbit, frame: StageFrame, nxt: StageFrame) -> tuple[np.ndarray, ...]:
     """``J`` and ``J_u`` from ``frame``'s last surface to ``nxt``'s first."""
+    _, end, ud, ends = _stage_end(frame, orbit.model, orbit.p)
+    m, n_u = frame.n - 1, ud.shape[0]
+    # columns: δx⁻ = Πᵀ x⊥⁻, then δu (rule 3 of gaitopt.orbit.sensitivity with δt₀ = 0)
+    dx = np.hstack([end["Pi"].T, np.zeros((frame.n, n_u))])
+    delta = np.hstack([np.zeros((n_u, m)), np.eye(n_u)])
+    D, _ = saltation(ends, ud, dx, np.zeros((1, m + n_u)), delta)
+    JJ = nxt.at(0.0)["Pi"] @ D
+    return JJ[:, :m], JJ[:, m:]
+
+
+def _stage_end(frame: StageFrame, model, p: np.ndarray) -> tuple:
+    """``(transition, frame.at(T), u̇ (a column), (f, g_x, g_u, r_x, r_u))`` at a stage's end
+    ``T``; ``u̇`` the input's rate just before it (held after it): the left derivative."""
     stage = frame.stage
-    model, p = orbit.model, orbit.p
     tr = model.phases[stage.phase].transitions[0]
-    T = stage.duration
-    end = frame.at(T)
-    # the input's rate just before the end (held after it): the left derivative
-    u, ud = stage.input(float(np.nextafter(T, -np.inf)))
-    f, g_x, g_u, r_x, r_u = (
-        np.asarray(v, dtype=float) for v in _jump_functions(frame.flow, tr.guard, tr.reset)(
-            end["x"], end["u"], p
-        )
-    )  # fmt: skip
-    f = f.ravel()
-    rate = float((g_x @ f + g_u @ ud).ravel()[0])
-    moved = r_x @ f + r_u @ ud  # the reset's image moves by this per unit of impact delay
-    Pi_next = nxt.at(0.0)["Pi"]
-    J = Pi_next @ (r_x - np.outer(moved, g_x.ravel()) / rate) @ end["Pi"].T
-    Ju = Pi_next @ (r_u - np.outer(moved, g_u.ravel()) / rate)
-    return J, Ju
+    end = frame.at(stage.duration)
+    ud = stage.input(float(np.nextafter(stage.duration, -np.inf)))[1][:, None]
+    return tr, end, ud, end_values(frame.flow, tr.guard, tr.reset, end["x"], end["u"], p)
