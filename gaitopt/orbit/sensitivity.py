@@ -247,11 +247,22 @@ class CollocatedArc:
 
 def phase_sensitivity(arc: CollocatedArc, p: np.ndarray, *, offset: bool = False) -> np.ndarray:
     """Eq. (2) at the arc's end: ``Φ = ∂x_end/∂[x₀; δt₀]`` (with ``offset``,
-    ``∂x_end/∂[x₀; δt₀; δ]``), ``n × (n + 1 [+ n_u])``."""
+    ``∂x_end/∂[x₀; δt₀; δ]``), ``n × (n + 1 [+ n_u])``.
+
+    ``R_X`` is block lower bidiagonal in the intervals (interval ``j``'s defects involve its own
+    ``d`` nodes and the last node of interval ``j − 1``), so eq. (2) is solved interval by
+    interval, ``Σ_j = −R_jj⁻¹ (R_z,j + R_j,j−1 Σ_{j−1})``: ``N`` solves of size ``n d``
+    instead of one of size ``n N d`` (the same numbers to rounding)."""
     R_X, R_z = defect_jacobians(
         arc.flow, arc.C, arc.X, arc.U, arc.Ud, arc.hs, p, label=arc.label, offset=offset
     )
-    return -np.linalg.solve(R_X, R_z)[-arc.X.shape[0] :, :]
+    size = arc.X.shape[0] * arc.C.shape[1]  # n d: one interval's free nodes
+    S = np.zeros((0, R_z.shape[1]))
+    for j in range(arc.hs.size):
+        rows = slice(j * size, (j + 1) * size)
+        rhs = R_z[rows] if j == 0 else R_z[rows] + R_X[rows, (j - 1) * size : j * size] @ S
+        S = -np.linalg.solve(R_X[rows, rows], rhs)
+    return S[-arc.X.shape[0] :, :]
 
 
 # -- rule 3: saltation at a reset with a guard ------------------------------------------------
