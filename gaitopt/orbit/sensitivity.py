@@ -105,7 +105,9 @@ def eliminate(J_w: Any, J_u: Any, m: int, n_g: int) -> tuple[Any, Any]:
     (raises ``LinAlgError`` where ``G_z`` is singular) or CasADi matrices."""
     G_s, G_z = J_w[:n_g, :m], J_w[:n_g, m:]
     P_s, P_z = J_w[n_g:, :m], J_w[n_g:, m:]
-    rhs, direct = (G_s, P_s) if J_u is None else (_hstack(G_s, J_u[:n_g]), _hstack(P_s, J_u[n_g:]))
+    rhs, direct = G_s, P_s
+    if J_u is not None:  # (two indices: one would index a CasADi matrix as a vector)
+        rhs, direct = _hstack(G_s, J_u[:n_g, :]), _hstack(P_s, J_u[n_g:, :])
     if not n_g:
         return direct, np.zeros((0, rhs.shape[1]))
     dz = np.linalg.solve(G_z, rhs) if isinstance(G_z, np.ndarray) else ca.solve(G_z, rhs)
