@@ -70,6 +70,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..kernels.nodes import flow_jacobian
+
 __all__ = [
     "CollocatedArc",
     "collocated_return_map",
@@ -178,8 +180,6 @@ def defect_jacobians(
     mapped over the nodes): the defect of interval ``j`` at its point ``c`` is
     ``Σ_r C[r, c] X_{jd+r} − h_j f(X_{jd+c+1}, U_{jd+c} + U̇_{jd+c} δt₀ + δ)``.  Where the flow
     has no SX form, the symbolic :func:`defect_function` (the same numbers)."""
-    from ..kernels.nodes import flow_jacobian
-
     d = C.shape[1]
     N = hs.size
     n, n_u = X.shape[0], U.shape[0]
