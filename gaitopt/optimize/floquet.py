@@ -25,6 +25,7 @@ from ..orbit.sensitivity import (
     defect_function,
     defect_jacobians,
     lift_jacobian,
+    multipliers,
 )
 from .collocation import Collocation
 from .radau import _derivative_matrix
@@ -73,9 +74,4 @@ def return_map_jacobian(col: Collocation, w: np.ndarray, p_model: np.ndarray) ->
     return collocated_return_map(arcs, L, col.section_index, p)[0]
 
 
-def multipliers_of(A: np.ndarray) -> np.ndarray:
-    """Eigenvalues of the return-map Jacobian, largest modulus first."""
-    if A.size == 0:
-        return np.zeros(0, complex)
-    mu = np.linalg.eigvals(A)
-    return mu[np.argsort(-np.abs(mu))]
+multipliers_of = multipliers  # eigenvalues of the return-map Jacobian, largest modulus first

@@ -26,14 +26,16 @@ built in gaitopt from four rules, all here:
        ``∂X/∂z = −R_X⁻¹ R_z``,                                                             (2)
 
    whose last node is ``Φ = ∂x_end/∂z``: exactly the Radau IIA solution of the variational
-   equations ``Σ̇ = f_x Σ + f_u (u̇ δt₀ + δ)`` (Hairer & Wanner 1996, IV.5), so at a solution
-   it is the transcription's own derivative, not an approximation of it.  ``R_X`` and ``R_z``
-   are assembled from the flow's Jacobians at the nodes (a compiled kernel,
-   :func:`gaitopt.kernels.nodes.flow_jacobian`), else from the symbolic defects.
+   equations ``Σ̇ = f_x Σ + f_u (u̇ δt₀ + δ)`` (a Runge–Kutta method differentiated is the
+   same method applied to the variational equations; Hairer, Nørsett & Wanner, *Solving
+   ODEs I*), so at a solution it is the transcription's own derivative, not an approximation
+   of it.  ``R_X`` and ``R_z`` are assembled from the flow's Jacobians at the nodes (a
+   compiled kernel, :func:`gaitopt.kernels.nodes.flow_jacobian`), else from the symbolic
+   defects; ``R_X`` is block lower bidiagonal, so eq. (2) is solved interval by interval.
 3. **Saltation at a reset with a guard** (:func:`saltation`; Aizerman & Gantmacher 1958;
-   Hiskens & Pai 2000, §IV).  A deviation ``δx`` at the nominal end of a phase, with input
-   deviation ``δu = u̇ δt₀ + δ`` there, reaches the guard ``g(x, u) = 0`` (crossing rate
-   ``ġ = g_x f + g_u u̇``) after
+   Hiskens & Pai 2000, IEEE Trans. Circuits Syst. I 47(2)).  A deviation ``δx`` at the
+   nominal end of a phase, with input deviation ``δu = u̇ δt₀ + δ`` there, reaches the guard
+   ``g(x, u) = 0`` (crossing rate ``ġ = g_x f + g_u u̇``) after
 
        ``δτ = −(g_x δx + g_u δu) / ġ``,                                                   (3)
 
@@ -43,8 +45,8 @@ built in gaitopt from four rules, all here:
        ``δx⁺ = r_x δx⁻ + r_u (u̇ δt_e + δ)``.                                              (4)
 
    With ``δt₀ = δ = 0`` this is ``S = r_x − (r_x f + r_u u̇) g_x/ġ``: the saltation matrix of
-   a map whose next phase starts at the event (its ``f⁺ g_x/ġ`` term belongs to a fixed-time
-   monodromy and is absent here; Leine & Nijmeijer 2004, eq. 3.97 with ``f⁺`` dropped).
+   a map whose next phase starts at the event (the classical matrix's ``f⁺ g_x/ġ`` term
+   belongs to a monodromy over a fixed time and is absent here).
    ``r_x`` may be rectangular: a reset that changes the state's dimension (the kneed walker's
    knee strike) needs nothing else.
 4. **Composition into the monodromy** (:func:`collocated_return_map`).  From the section's
@@ -82,6 +84,7 @@ __all__ = [
     "end_values",
     "lift_jacobian",
     "map_blocks",
+    "multipliers",
     "phase_sensitivity",
     "saltation",
     "section_jacobians",
@@ -134,6 +137,15 @@ def section_jacobians(J_w: Any, J_u: Any, m: int, n_g: int) -> tuple[Any, Any]:
     if J_u is None:
         return total, None
     return total[:, :m], total[:, m:]
+
+
+def multipliers(A: np.ndarray) -> np.ndarray:
+    """The eigenvalues of a return map's Jacobian (or a monodromy), largest modulus first (an
+    empty complex array for a 0 × 0 one)."""
+    if A.size == 0:
+        return np.zeros(0, complex)
+    mu = np.linalg.eigvals(A)
+    return mu[np.argsort(-np.abs(mu))]
 
 
 # -- rule 2: phase sensitivity along a collocated arc -----------------------------------------

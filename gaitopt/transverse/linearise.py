@@ -38,13 +38,14 @@ others are 0 (where a reset's image has lower dimension) or 1 (a conserved quant
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
 
 import casadi as ca
 import numpy as np
 
-from ..orbit.sensitivity import end_values, saltation
+from ..orbit.sensitivity import end_values, multipliers, saltation
 from .orbit import NominalOrbit, Stage, integrate_pieces, nominal_orbit
 
 __all__ = [
@@ -53,6 +54,7 @@ __all__ = [
     "transverse_linearisation",
     "frame_functions",
     "householder",
+    "stage_transition",
 ]
 
 
@@ -188,18 +190,24 @@ def _choose_axis(stage: Stage, flow: ca.Function, p: np.ndarray) -> tuple[int, f
     return best[1], best[2]
 
 
-def _transition(frame: StageFrame, closed: callable | None = None) -> np.ndarray:
-    """``Φ`` of ``A⊥`` (or of ``closed(τ, data)``, a closed-loop matrix) over ``[0, T]``."""
+def stage_transition(
+    frame: StageFrame, generator: Callable | None = None, size: int | None = None,
+    rtol: float = 1e-11,
+) -> np.ndarray:  # fmt: skip
+    """``Φ`` over the stage ``[0, T]`` of ``dΦ/dτ = G(τ) Φ``, ``Φ(0) = I``: ``G = A⊥`` (the
+    stage's transverse state-transition matrix), or ``generator(τ, frame.at(τ))`` (``size ×
+    size``: a closed loop, or ``A⊥`` with the clock's lead), integrated between the input's
+    breaks (rtol ``rtol``, atol 1e-12)."""
     stage = frame.stage
-    m = frame.n - 1
+    m = frame.n - 1 if size is None else size
 
     def rhs(tau: float, y: np.ndarray) -> np.ndarray:
         d = frame.at(tau)
-        A = d["A_perp"] if closed is None else closed(tau, d)
-        return (A @ y.reshape(m, m)).ravel()
+        G = d["A_perp"] if generator is None else generator(tau, d)
+        return (G @ y.reshape(m, m)).ravel()
 
     edges = stage.breaks[(stage.breaks >= 0) & (stage.breaks <= stage.duration)]
-    y, _ = integrate_pieces(rhs, np.eye(m).ravel(), edges, rtol=1e-11, atol=1e-12, dense=False)
+    y, _ = integrate_pieces(rhs, np.eye(m).ravel(), edges, rtol=rtol, atol=1e-12, dense=False)
     return y.reshape(m, m)
 
 
@@ -232,17 +240,12 @@ def transverse_linearisation(gait, *, extension: float = 0.15) -> TransverseLine
         J, Ju = _jump(orbit, frame, frames[(j + 1) % len(frames)])
         lin.jumps.append(J)
         lin.jump_inputs.append(Ju)
-        lin.transitions.append(_transition(frame))
+        lin.transitions.append(stage_transition(frame))
     lin.monodromy = monodromy(lin.transitions, lin.jumps)
-    lin.multipliers = _sorted_eigenvalues(lin.monodromy)
+    lin.multipliers = multipliers(lin.monodromy)
     lin.clock_monodromy = clock_monodromy(lin)
-    lin.clock_multipliers = _sorted_eigenvalues(lin.clock_monodromy)
+    lin.clock_multipliers = multipliers(lin.clock_monodromy)
     return lin
-
-
-def _sorted_eigenvalues(M: np.ndarray) -> np.ndarray:
-    mu = np.linalg.eigvals(M)
-    return mu[np.argsort(-np.abs(mu))]
 
 
 def clock_monodromy(lin: TransverseLinearisation) -> np.ndarray:
@@ -270,9 +273,8 @@ def clock_monodromy(lin: TransverseLinearisation) -> np.ndarray:
         stage = frame.stage
         m = frame.n - 1
 
-        def rhs(tau: float, y: np.ndarray, frame: StageFrame = frame, m: int = m) -> np.ndarray:
-            d = frame.at(tau)
-            ud = frame.stage.input(tau)[1]
+        def generator(tau: float, d: dict, stage: Stage = stage, m: int = m) -> np.ndarray:
+            ud = stage.input(tau)[1]
             f, Pi = d["f"], d["Pi"]
             ff = float(f @ f)
             G = np.zeros((m + 1, m + 1))
@@ -280,12 +282,9 @@ def clock_monodromy(lin: TransverseLinearisation) -> np.ndarray:
             G[:m, m] = d["B_perp"] @ ud
             G[m, :m] = -(f @ d["A"] + d["fdot"]) @ Pi.T / ff
             G[m, m] = -float(f @ d["B"] @ ud) / ff
-            return (G @ y.reshape(m + 1, m + 1)).ravel()
+            return G
 
-        edges = stage.breaks[(stage.breaks >= 0) & (stage.breaks <= stage.duration)]
-        y, _ = integrate_pieces(rhs, np.eye(m + 1).ravel(), edges, rtol=1e-11, atol=1e-12,
-                                dense=False)  # fmt: skip
-        Phi = y.reshape(m + 1, m + 1)
+        Phi = stage_transition(frame, generator, m + 1)
         nxt = lin.frames[(j + 1) % len(lin.frames)]
         # the jump of [δx⊥; θ] (rule 3 of gaitopt.orbit.sensitivity, θ the clock's lead)
         tr, end, ud, ends = _stage_end(frame, model, p)
