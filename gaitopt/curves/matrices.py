@@ -10,6 +10,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..orbit.sensitivity import map_blocks, section_jacobians
 from ..shooting import ShootingProblem
 
 __all__ = [
@@ -73,13 +74,6 @@ def border_size(kind: str, m: int) -> int:
 
 def return_map_jacobian(problem: ShootingProblem, F_w: np.ndarray) -> np.ndarray:
     """``A = ∂P/∂s`` from the shooting Jacobian ``∂F/∂w`` (``F = [G; P − s]``; the implicit
-    function theorem, :func:`gaitopt.stability.section_jacobians`)."""
-    J = np.array(F_w, dtype=float)
-    J[problem.n_g :, : problem.m] += np.eye(problem.m)
-    G_s, G_z, P_s, P_z = (
-        J[: problem.n_g, : problem.m],
-        J[: problem.n_g, problem.m :],
-        J[problem.n_g :, : problem.m],
-        J[problem.n_g :, problem.m :],
-    )
-    return P_s - P_z @ np.linalg.solve(G_z, G_s) if problem.n_g else P_s
+    function theorem, :func:`gaitopt.orbit.sensitivity.section_jacobians`)."""
+    return section_jacobians(map_blocks(F_w, problem.m, problem.n_g), None, problem.m,
+                             problem.n_g)[0]  # fmt: skip

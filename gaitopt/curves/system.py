@@ -55,6 +55,7 @@ import numpy as np
 
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
+from ..orbit.sensitivity import eliminate, map_blocks, section_jacobians
 from ..shooting import MultipleShooting, ShootingProblem, shooting_problem
 from .constraints import CONSTRAINT_QUANTITIES, constraint_condition, n_extra, phase_start
 from .matrices import (
@@ -190,11 +191,9 @@ class AugmentedSystem:
         the Newton corrector needs only the ``g`` to be exact).
         """
         problem, m, n_g = self.problem, self.problem.m, self.problem.n_g
-        J = np.array(ev.F_w, dtype=float)
-        J[n_g:, :m] += np.eye(m)  # ∂[G; P]/∂w
-        G_s, G_z, P_s, P_z = J[:n_g, :m], J[:n_g, m:], J[n_g:, :m], J[n_g:, m:]
-        GzGs = np.linalg.solve(G_z, G_s) if n_g else np.zeros((0, m))
-        A = P_s - P_z @ GzGs
+        J = map_blocks(ev.F_w, m, n_g)  # ∂[G; P]/∂w
+        A, GzGs = eliminate(J, None, m, n_g)  # A = P_s − P_z G_z⁻¹ G_s
+        G_z, P_z = J[:n_g, m:], J[n_g:, m:]
         M = singular_matrix(self.kind, A)
         K = np.block([[M, b[:, None]], [c[None, :], np.zeros((1, 1))]])
         rhs = np.zeros(m + 1)
@@ -267,9 +266,7 @@ def _condition_function(model_cls, disc, steps, kind, boundary) -> ca.Function:
         A = sym(m, m)  # numerically, from the shooting kernels (AugmentedSystem.evaluate)
     else:
         J_w, _, _, _ = _symbolic(problem.linearisation, sym)(w[: problem.size], u, p)
-        # A = P_s − P_z G_z⁻¹ G_s (implicit function theorem; gaitopt.stability.section_jacobians)
-        G_s, G_z, P_s, P_z = J_w[:n_g, :m], J_w[:n_g, m:], J_w[n_g:, :m], J_w[n_g:, m:]
-        A = P_s - P_z @ ca.solve(G_z, G_s) if n_g else P_s
+        A, _ = section_jacobians(J_w, None, m, n_g)  # A = P_s − P_z G_z⁻¹ G_s, symbolically
     if kind == "boundary" and boundary[0] in CONSTRAINT_QUANTITIES:
         g = _symbolic(constraint_condition(model_cls, disc, steps, boundary), sym)(w, u, p)
     elif kind == "boundary":

@@ -10,11 +10,11 @@ the orbit: the discrete variational equations.  Differentiating phase ``k``'s Ra
 ``X C − h F(X, U + U̇ δt₀)`` in its start state and start-time shift gives, per node, ``n × m``
 sensitivity unknowns ``Σ`` (one column per section coordinate) with the linear defects
 ``Σ C − h (f_x Σ + f_u U̇ δt₀)`` (the same Radau IIA scheme, so at a solution ``Σ`` is the IFT
-sensitivity exactly, not an approximation of it).  The first phase starts from ``∂lift/∂s``
-with ``δt₀ = 0``; each phase end adds the saltation correction (Aizerman & Gantmacher 1958;
-Hiskens & Pai 2000): the time to the guard ``δτ = −(g_x δx + g_u u̇ δt₀)/ġ`` (``ġ`` bounded away
-from 0 by :attr:`~GaitProblem.min_crossing_rate`), ``δx⁻ = δx + f δτ``, then the reset's
-Jacobian ``δx⁺ = r_x δx⁻ + r_u u̇ (δt₀ + δτ)``; the feedforward clock restarts at each section.
+sensitivity exactly, not an approximation of it: rule 2 of :mod:`gaitopt.orbit.sensitivity`).
+The first phase starts from ``∂lift/∂s`` with ``δt₀ = 0``; each phase end adds that module's
+saltation (rule 3, symbolically: the time to the guard ``δτ = −(g_x δx + g_u u̇ δt₀)/ġ``, ``ġ``
+bounded away from 0 by :attr:`~GaitProblem.min_crossing_rate`, then the reset's Jacobian); the
+feedforward clock restarts at each section.
 ``A`` is a block of ``m × m`` unknowns equal to the section rows of the last ``δx⁺``.
 
 **The bound.**  Its characteristic polynomial's coefficients (Faddeev–LeVerrier, polynomial in
@@ -48,6 +48,7 @@ import numpy as np
 import scipy.sparse
 import scipy.sparse.linalg
 
+from ..orbit.sensitivity import end_jacobians, saltation
 from .radau import _derivative_matrix
 from .schur import charpoly, disc_conditions, scaled
 
@@ -88,18 +89,6 @@ def _variational(flow: ca.Function, m: int) -> ca.Function:
         ca.mtimes(ca.jacobian(f, u), ud), dt0
     )
     return ca.Function("variational", [x, u, ud, p, S, dt0], [ca.vec(rhs)])
-
-
-def _end(flow: ca.Function, guard: ca.Function, reset: ca.Function) -> ca.Function:
-    """``(f, g_x, g_u, r_x, r_u)`` at a phase end (as :mod:`gaitopt.optimize.floquet`'s)."""
-    n, n_u, n_p = flow.size1_in(0), flow.size1_in(1), flow.size1_in(2)
-    x, u, p = ca.SX.sym("x", n), ca.SX.sym("u", n_u), ca.SX.sym("p", n_p)
-    g, r = guard(x, u, p), reset(x, u, p)
-    return ca.Function(
-        "end",
-        [x, u, p],
-        [flow(x, u, p), ca.jacobian(g, x), ca.jacobian(g, u), ca.jacobian(r, x), ca.jacobian(r, u)],
-    )
 
 
 def add_spectral_bound(
@@ -154,15 +143,8 @@ def add_spectral_bound(
         add(f"variational equations ({label})", ca.horzcat(*defects))
         _continuity_rows(col, B, add, k, Uk, label)
         rough.append(_roughness(col, Ud, hs))
-        x_end, u_end, ud_end = X[k][:, -1], Uk[:, -1], Ud[:, -1]
-        f, g_x, g_u, r_x, r_u = _end(phase.flow, tr.guard, tr.reset)(x_end, u_end, p)
-        S_end = ca.reshape(Sk[:, -1], n, m)
-        rate = ca.mtimes(g_x, f) + ca.mtimes(g_u, ud_end)
-        dtau = -(ca.mtimes(g_x, S_end) + ca.mtimes(ca.mtimes(g_u, ud_end), St)) / rate
-        dt_event = St + dtau
-        Sx = ca.mtimes(r_x, S_end + ca.mtimes(f, dtau)) + ca.mtimes(
-            ca.mtimes(r_u, ud_end), dt_event
-        )
+        ends = end_jacobians(phase.flow, tr.guard, tr.reset)(X[k][:, -1], Uk[:, -1], p)
+        Sx, dt_event = saltation(ends, Ud[:, -1], ca.reshape(Sk[:, -1], n, m), St)
         St = ca.MX.zeros(1, m) if (k + 1) % n_cycle == 0 else dt_event
     A_expr = Sx[col.section_index, :]
     A = B.add("Amap", m, m)

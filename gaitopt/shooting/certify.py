@@ -21,6 +21,7 @@ from ..orbit.certificate import (
     constant_input,
 )
 from ..orbit.certificate import check_constraints as _check_constraints
+from ..orbit.sensitivity import multipliers as sorted_multipliers
 from ..result import LimitCycle, OrbitArc
 from ..stability import is_stable, section_jacobians
 from .problem import ShootingProblem
@@ -126,8 +127,7 @@ def certify(
             "singular",
             orbit=orbit,
         )
-    multipliers = np.linalg.eigvals(A) if A.size else np.zeros(0, complex)
-    multipliers = multipliers[np.argsort(-np.abs(multipliers))]
+    multipliers = sorted_multipliers(A)
 
     verified, error, vmessage = False, float("nan"), "not verified by simulation (verify=False)"
     if verify:

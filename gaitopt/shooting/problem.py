@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
+from ..orbit.sensitivity import map_blocks
 from ..result import OrbitArc
 from .newton import solve as _solve
 from .symbolic import SymbolicShooting
@@ -313,10 +314,8 @@ class ShootingProblem(SymbolicShooting):
     # -- the return map's linearisation from the residual's Jacobian --------------------------
     def map_jacobian(self, F_w) -> np.ndarray:
         """``∂[G; P]/∂w`` from ``∂F/∂w`` (``F = [G; P − s]``): the blocks of the return map's
-        Jacobian (:func:`gaitopt.stability.section_jacobians`)."""
-        J = np.array(F_w, dtype=float)
-        J[self.n_g :, : self.m] += np.eye(self.m)
-        return J
+        Jacobian (:func:`gaitopt.orbit.sensitivity.section_jacobians`)."""
+        return map_blocks(F_w, self.m, self.n_g)
 
     def newton_step(self, F_w, F) -> np.ndarray:
         """``−(∂F/∂w)⁻¹ F``: one Newton correction (raises ``LinAlgError`` where singular)."""

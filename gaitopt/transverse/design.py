@@ -12,9 +12,9 @@ from typing import Any
 import numpy as np
 
 from ..errors import GaitoptInputError
+from ..orbit.sensitivity import multipliers
 from .law import LawBudgetExceeded, TransverseLaw
-from .linearise import TransverseLinearisation, transverse_linearisation
-from .orbit import integrate_pieces
+from .linearise import TransverseLinearisation, stage_transition, transverse_linearisation
 from .result import TransverseLQR, TransverseTrial
 from .riccati import PeriodicRiccati, periodic_riccati
 
@@ -102,19 +102,13 @@ def closed_loop_monodromy(lin: TransverseLinearisation, ric: PeriodicRiccati) ->
     ``A⊥ − B⊥ K(τ)`` over stage ``k`` (the gains from the Riccati solution itself)."""
     M = None
     for k, frame in enumerate(lin.frames):
-        stage = frame.stage
-        m = frame.n - 1
 
-        def rhs(tau: float, y: np.ndarray, frame=frame, k=k, m=m) -> np.ndarray:
-            d = frame.at(tau)
-            A = d["A_perp"] - d["B_perp"] @ ric.gain(k, tau)
-            return (A @ y.reshape(m, m)).ravel()
+        def closed(tau: float, d: dict, k: int = k) -> np.ndarray:
+            return d["A_perp"] - d["B_perp"] @ ric.gain(k, tau)
 
-        edges = stage.breaks[(stage.breaks >= 0) & (stage.breaks <= stage.duration)]
-        y, _ = integrate_pieces(rhs, np.eye(m).ravel(), edges, rtol=1e-10, atol=1e-12,
-                                dense=False)  # fmt: skip
-        J = lin.jumps[k] - lin.jump_inputs[k] @ ric.gain(k, stage.duration)
-        step = J @ y.reshape(m, m)
+        Phi = stage_transition(frame, closed, rtol=1e-10)
+        J = lin.jumps[k] - lin.jump_inputs[k] @ ric.gain(k, frame.stage.duration)
+        step = J @ Phi
         M = step if M is None else step @ M
     assert M is not None
     return M
@@ -294,8 +288,7 @@ def transverse_lqr(
     if measured is None:
         problems.append("a perturbed controlled orbit did not complete")
     else:
-        mu = np.linalg.eigvals(measured)
-        result.measured_multipliers = mu[np.argsort(-np.abs(mu))]
+        result.measured_multipliers = multipliers(measured)
         gap, rest = _match(result.measured_multipliers, mu_cl)
         result.multiplier_gap = gap
         if gap > _MULTIPLIER_TOL:

@@ -38,12 +38,14 @@ others are 0 (where a reset's image has lower dimension) or 1 (a conserved quant
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
 
 import casadi as ca
 import numpy as np
 
+from ..orbit.sensitivity import end_values, multipliers, saltation
 from .orbit import NominalOrbit, Stage, integrate_pieces, nominal_orbit
 
 __all__ = [
@@ -52,6 +54,7 @@ __all__ = [
     "transverse_linearisation",
     "frame_functions",
     "householder",
+    "stage_transition",
 ]
 
 
@@ -79,19 +82,6 @@ def frame_functions(flow: ca.Function) -> ca.Function:
     H = ca.SX.eye(n) - 2 * ca.mtimes(v, v.T) / ca.dot(v, v)
     Hdot = ca.jtimes(H, ca.vertcat(x, u), ca.vertcat(f, ud))
     return ca.Function("frame", [x, u, ud, p, a], [f, fdot, A, B, H, Hdot])
-
-
-@lru_cache(maxsize=64)
-def _jump_functions(flow: ca.Function, guard: ca.Function, reset: ca.Function) -> ca.Function:
-    """``(f, g_x, g_u, r_x, r_u)`` at a stage's end."""
-    n, n_u, n_p = flow.size1_in(0), flow.size1_in(1), flow.size1_in(2)
-    x, u, p = ca.SX.sym("x", n), ca.SX.sym("u", n_u), ca.SX.sym("p", n_p)
-    g, r = guard(x, u, p), reset(x, u, p)
-    return ca.Function(
-        "jump",
-        [x, u, p],
-        [flow(x, u, p), ca.jacobian(g, x), ca.jacobian(g, u), ca.jacobian(r, x), ca.jacobian(r, u)],
-    )
 
 
 @dataclass
@@ -200,18 +190,24 @@ def _choose_axis(stage: Stage, flow: ca.Function, p: np.ndarray) -> tuple[int, f
     return best[1], best[2]
 
 
-def _transition(frame: StageFrame, closed: callable | None = None) -> np.ndarray:
-    """``Φ`` of ``A⊥`` (or of ``closed(τ, data)``, a closed-loop matrix) over ``[0, T]``."""
+def stage_transition(
+    frame: StageFrame, generator: Callable | None = None, size: int | None = None,
+    rtol: float = 1e-11,
+) -> np.ndarray:  # fmt: skip
+    """``Φ`` over the stage ``[0, T]`` of ``dΦ/dτ = G(τ) Φ``, ``Φ(0) = I``: ``G = A⊥`` (the
+    stage's transverse state-transition matrix), or ``generator(τ, frame.at(τ))`` (``size ×
+    size``: a closed loop, or ``A⊥`` with the clock's lead), integrated between the input's
+    breaks (rtol ``rtol``, atol 1e-12)."""
     stage = frame.stage
-    m = frame.n - 1
+    m = frame.n - 1 if size is None else size
 
     def rhs(tau: float, y: np.ndarray) -> np.ndarray:
         d = frame.at(tau)
-        A = d["A_perp"] if closed is None else closed(tau, d)
-        return (A @ y.reshape(m, m)).ravel()
+        G = d["A_perp"] if generator is None else generator(tau, d)
+        return (G @ y.reshape(m, m)).ravel()
 
     edges = stage.breaks[(stage.breaks >= 0) & (stage.breaks <= stage.duration)]
-    y, _ = integrate_pieces(rhs, np.eye(m).ravel(), edges, rtol=1e-11, atol=1e-12, dense=False)
+    y, _ = integrate_pieces(rhs, np.eye(m).ravel(), edges, rtol=rtol, atol=1e-12, dense=False)
     return y.reshape(m, m)
 
 
@@ -244,17 +240,12 @@ def transverse_linearisation(gait, *, extension: float = 0.15) -> TransverseLine
         J, Ju = _jump(orbit, frame, frames[(j + 1) % len(frames)])
         lin.jumps.append(J)
         lin.jump_inputs.append(Ju)
-        lin.transitions.append(_transition(frame))
+        lin.transitions.append(stage_transition(frame))
     lin.monodromy = monodromy(lin.transitions, lin.jumps)
-    lin.multipliers = _sorted_eigenvalues(lin.monodromy)
+    lin.multipliers = multipliers(lin.monodromy)
     lin.clock_monodromy = clock_monodromy(lin)
-    lin.clock_multipliers = _sorted_eigenvalues(lin.clock_monodromy)
+    lin.clock_multipliers = multipliers(lin.clock_monodromy)
     return lin
-
-
-def _sorted_eigenvalues(M: np.ndarray) -> np.ndarray:
-    mu = np.linalg.eigvals(M)
-    return mu[np.argsort(-np.abs(mu))]
 
 
 def clock_monodromy(lin: TransverseLinearisation) -> np.ndarray:
@@ -282,9 +273,8 @@ def clock_monodromy(lin: TransverseLinearisation) -> np.ndarray:
         stage = frame.stage
         m = frame.n - 1
 
-        def rhs(tau: float, y: np.ndarray, frame: StageFrame = frame, m: int = m) -> np.ndarray:
-            d = frame.at(tau)
-            ud = frame.stage.input(tau)[1]
+        def generator(tau: float, d: dict, stage: Stage = stage, m: int = m) -> np.ndarray:
+            ud = stage.input(tau)[1]
             f, Pi = d["f"], d["Pi"]
             ff = float(f @ f)
             G = np.zeros((m + 1, m + 1))
@@ -292,38 +282,19 @@ def clock_monodromy(lin: TransverseLinearisation) -> np.ndarray:
             G[:m, m] = d["B_perp"] @ ud
             G[m, :m] = -(f @ d["A"] + d["fdot"]) @ Pi.T / ff
             G[m, m] = -float(f @ d["B"] @ ud) / ff
-            return (G @ y.reshape(m + 1, m + 1)).ravel()
+            return G
 
-        edges = stage.breaks[(stage.breaks >= 0) & (stage.breaks <= stage.duration)]
-        y, _ = integrate_pieces(rhs, np.eye(m + 1).ravel(), edges, rtol=1e-11, atol=1e-12,
-                                dense=False)  # fmt: skip
-        Phi = y.reshape(m + 1, m + 1)
+        Phi = stage_transition(frame, generator, m + 1)
         nxt = lin.frames[(j + 1) % len(lin.frames)]
-        # the jump, column by column of [δx⊥; θ]
-        tr = model.phases[stage.phase].transitions[0]
-        T = stage.duration
-        end = frame.at(T)
-        ud = stage.input(float(np.nextafter(T, -np.inf)))[1]
-        f, g_x, g_u, r_x, r_u = (
-            np.asarray(v, dtype=float) for v in _jump_functions(frame.flow, tr.guard, tr.reset)(
-                end["x"], end["u"], p
-            )
-        )  # fmt: skip
-        f, g_x, g_u = f.ravel(), g_x.ravel(), g_u.ravel()
-        rate = float(g_x @ f + g_u @ ud)
+        # the jump of [δx⊥; θ] (rule 3 of gaitopt.orbit.sensitivity, θ the clock's lead)
+        tr, end, ud, ends = _stage_end(frame, model, p)
+        theta = np.zeros((1, m + 1))
+        theta[0, m] = 1.0
+        D, dt_event = saltation(ends, ud, np.hstack([end["Pi"].T, np.zeros((frame.n, 1))]), theta)
         start = nxt.at(0.0)
-        f_next = start["f"]
+        tau_next = start["f"] @ D / float(start["f"] @ start["f"])
         closes = (stage.phase == n_phases - 1) or tr.returns_to_section
-        m_next = nxt.n - 1
-        Jz = np.zeros((m_next + 1, m + 1))
-        for c in range(m + 1):
-            dx = end["Pi"].T[:, c] if c < m else np.zeros(frame.n)
-            theta = 1.0 if c == m else 0.0
-            dt = -(g_x @ dx + g_u @ ud * theta) / rate
-            D = r_x @ (dx + f * dt) + r_u @ (ud * (dt + theta))
-            tau_next = float(f_next @ D) / float(f_next @ f_next)
-            Jz[:m_next, c] = start["Pi"] @ D
-            Jz[m_next, c] = -tau_next if closes else theta + dt - tau_next
+        Jz = np.vstack([start["Pi"] @ D, -tau_next if closes else dt_event[0] - tau_next])
         step = Jz @ Phi
         M = step if M is None else step @ M
     assert M is not None
@@ -340,22 +311,21 @@ def monodromy(transitions: list[np.ndarray], jumps: list[np.ndarray]) -> np.ndar
 
 def _jump(orbit: NominalOrbit, frame: StageFrame, nxt: StageFrame) -> tuple[np.ndarray, ...]:
     """``J`` and ``J_u`` from ``frame``'s last surface to ``nxt``'s first."""
+    _, end, ud, ends = _stage_end(frame, orbit.model, orbit.p)
+    m, n_u = frame.n - 1, ud.shape[0]
+    # columns: δx⁻ = Πᵀ x⊥⁻, then δu (rule 3 of gaitopt.orbit.sensitivity with δt₀ = 0)
+    dx = np.hstack([end["Pi"].T, np.zeros((frame.n, n_u))])
+    delta = np.hstack([np.zeros((n_u, m)), np.eye(n_u)])
+    D, _ = saltation(ends, ud, dx, np.zeros((1, m + n_u)), delta)
+    JJ = nxt.at(0.0)["Pi"] @ D
+    return JJ[:, :m], JJ[:, m:]
+
+
+def _stage_end(frame: StageFrame, model, p: np.ndarray) -> tuple:
+    """``(transition, frame.at(T), u̇ (a column), (f, g_x, g_u, r_x, r_u))`` at a stage's end
+    ``T``; ``u̇`` the input's rate just before it (held after it): the left derivative."""
     stage = frame.stage
-    model, p = orbit.model, orbit.p
     tr = model.phases[stage.phase].transitions[0]
-    T = stage.duration
-    end = frame.at(T)
-    # the input's rate just before the end (held after it): the left derivative
-    u, ud = stage.input(float(np.nextafter(T, -np.inf)))
-    f, g_x, g_u, r_x, r_u = (
-        np.asarray(v, dtype=float) for v in _jump_functions(frame.flow, tr.guard, tr.reset)(
-            end["x"], end["u"], p
-        )
-    )  # fmt: skip
-    f = f.ravel()
-    rate = float((g_x @ f + g_u @ ud).ravel()[0])
-    moved = r_x @ f + r_u @ ud  # the reset's image moves by this per unit of impact delay
-    Pi_next = nxt.at(0.0)["Pi"]
-    J = Pi_next @ (r_x - np.outer(moved, g_x.ravel()) / rate) @ end["Pi"].T
-    Ju = Pi_next @ (r_u - np.outer(moved, g_u.ravel()) / rate)
-    return J, Ju
+    end = frame.at(stage.duration)
+    ud = stage.input(float(np.nextafter(stage.duration, -np.inf)))[1][:, None]
+    return tr, end, ud, end_values(frame.flow, tr.guard, tr.reset, end["x"], end["u"], p)

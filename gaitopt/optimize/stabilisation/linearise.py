@@ -1,19 +1,18 @@
 """The offset linearisation ``sₖ₊₁ − s* = A (sₖ − s*) + B δₖ`` of an optimal gait's return map:
-``A`` and ``B`` by AD through the Radau transcription (the floquet module's implicit-function
-construction with the offset ``δ`` as an extra unknown; Hiskens & Pai 2000), ``B`` also by
-central differences of the independent event-located simulator."""
+``A`` and ``B`` by AD through the Radau transcription (:mod:`gaitopt.orbit.sensitivity`'s
+construction, as the floquet module's, with the offset ``δ`` as an extra unknown; Hiskens & Pai
+2000), ``B`` also by central differences of the independent event-located simulator."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from functools import lru_cache
 
-import casadi as ca
 import numpy as np
 
+from ...orbit.sensitivity import collocated_return_map
 from ...simulation import Simulation, simulate
-from ..collocation import Collocation, _derivative_matrix
-from ..floquet import _end_jacobians, _lift_jacobian
+from ..collocation import Collocation
+from ..floquet import collocated_arcs
 from ..result import OptimalGait
 from ..verify import feedforward_of
 
@@ -27,37 +26,6 @@ __all__ = [
 ]
 
 FD_STEP = 1e-6  # central differences of the simulated map (section units, input units)
-
-
-@lru_cache(maxsize=32)
-def _phase_residual(flow: ca.Function, N: int, d: int, C_key: bytes) -> ca.Function:
-    """``R(Xfree, x0, dt0, delta, U, Udot, H, p)``: the collocation defects of one phase with the
-    node inputs ``U + U̇ dt0 + δ``, and the Jacobians with respect to ``Xfree`` and
-    ``[x0; dt0; δ]``."""
-    C = np.frombuffer(C_key).reshape(d + 1, d)
-    n, n_u, n_p = flow.size1_in(0), flow.size1_in(1), flow.size1_in(2)
-    Xf = ca.SX.sym("X", n, N * d)
-    x0 = ca.SX.sym("x0", n)
-    dt0 = ca.SX.sym("dt0")
-    delta = ca.SX.sym("delta", n_u)
-    U = ca.SX.sym("U", n_u, N * d)
-    Ud = ca.SX.sym("Ud", n_u, N * d)
-    H = ca.SX.sym("H", N)
-    p = ca.SX.sym("p", n_p)
-    X = ca.horzcat(x0, Xf)
-    shift = ca.repmat(delta, 1, N * d)
-    F = flow.map(N * d)(Xf, U + Ud * dt0 + shift, p)
-    defects = [
-        ca.mtimes(X[:, j * d : j * d + d + 1], ca.DM(C)) - H[j] * F[:, j * d : (j + 1) * d]
-        for j in range(N)
-    ]
-    R = ca.vec(ca.horzcat(*defects))
-    z = ca.vertcat(x0, dt0, delta)
-    return ca.Function(
-        "offset_sensitivity",
-        [Xf, x0, dt0, delta, U, Ud, H, p],
-        [ca.jacobian(R, ca.vec(Xf)), ca.jacobian(R, z)],
-    )
 
 
 def offset_jacobian(col: Collocation, w: np.ndarray, p_model: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -81,54 +49,8 @@ def offset_jacobian(col: Collocation, w: np.ndarray, p_model: np.ndarray) -> tup
     B : numpy.ndarray
         ``∂P/∂δ`` (m × n_u: section units per input unit).
     """
-    sol = col.unpack(w, p_model)
-    p = sol["p"]
-    model = col.model
-    N, d = col.N, col.d
-    D = _derivative_matrix(col.tau[1:], col.tau[1:])
-    n_cycle = len(model.phases)
-    n_u = len(model.inputs)
-    L = np.asarray(_lift_jacobian(model.section.lift)(sol["s"], p), dtype=float)
-    m = L.shape[1]
-    n0 = L.shape[0]
-    # Rows (δx, δt, δ) per unit (δs, δ); δ is carried unchanged through the orbit.
-    M = np.zeros((n0 + 1 + n_u, m + n_u))
-    M[:n0, :m] = L
-    M[n0 + 1 :, m:] = np.eye(n_u)
-    for k, i in enumerate(col.chain):
-        phase = model.phases[i]
-        tr = phase.transitions[0]
-        n = phase.n
-        X, U, T = sol["X"][k], sol["U"][k], float(sol["T"][k])
-        hs = T * np.diff(sol["breaks"][k])
-        Ud = np.hstack([U[:, j * d : (j + 1) * d] @ D.T / hs[j] for j in range(N)])
-        sens = _phase_residual(phase.flow, N, d, col.C.tobytes())
-        R_X, R_z = (
-            np.asarray(v, dtype=float)
-            for v in sens(X[:, 1:], X[:, 0], 0.0, np.zeros(n_u), U, Ud, hs, p)
-        )
-        Phi = -np.linalg.solve(R_X, R_z)[-n:, :]  # δx_end per (δx0, δt0, δ)
-        f, g_x, g_u, r_x, r_u = (
-            np.asarray(v, dtype=float)
-            for v in _end_jacobians(phase.flow, tr.guard, tr.reset)(X[:, -1], U[:, -1], p)
-        )
-        f, udot = f.ravel(), Ud[:, -1]
-        e_t = np.zeros((1, n + 1 + n_u))
-        e_t[0, n] = 1.0
-        e_d = np.zeros((n_u, n + 1 + n_u))
-        e_d[:, n + 1 :] = np.eye(n_u)
-        g_rate = float((g_x @ f + g_u @ udot).ravel()[0])
-        # The crossing moves by δτ = −(g_x δx + g_u (u̇ δt0 + δ)) / ġ (the input at the end is
-        # u + u̇ (δt0 + δτ) + δ); the reset sees that input.
-        dtau = -(g_x @ Phi + g_u @ (np.outer(udot, e_t) + e_d)) / g_rate
-        dx_minus = Phi + np.outer(f, dtau)
-        dt_event = e_t + dtau
-        dx_plus = r_x @ dx_minus + r_u @ (np.outer(udot, dt_event) + e_d)
-        M = np.vstack([dx_plus, dt_event, e_d]) @ M
-        if (k + 1) % n_cycle == 0:
-            M[n0, :] = 0.0  # the feedforward clock restarts at the section
-    rows = col.section_index
-    return M[:n0, :m][rows, :], M[:n0, m:][rows, :]
+    arcs, L, p = collocated_arcs(col, w, p_model)
+    return collocated_return_map(arcs, L, col.section_index, p, offset=True)
 
 
 class _Offset:
