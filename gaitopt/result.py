@@ -87,6 +87,9 @@ class OrbitArc:
         States, ``len(states) × len(t)``.
     transition : str
         The transition that ends the arc.
+    u : numpy.ndarray or None
+        Inputs at the same samples, ``len(model.inputs) × len(t)``: the per-step input held
+        (a :class:`LimitCycle`), or the input profile (an :class:`~gaitopt.OptimalGait`).
     """
 
     phase: int
@@ -95,6 +98,7 @@ class OrbitArc:
     t: np.ndarray
     x: np.ndarray
     transition: str
+    u: np.ndarray | None = None
 
 
 @dataclass
