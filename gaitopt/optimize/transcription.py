@@ -71,7 +71,9 @@ class CollocationTranscription:
     @cached_property
     def columns(self) -> Layout:
         B = self.col.blocks
-        return Layout.from_sizes(zip(B.names, B.shapes, strict=True))
+        # A column block (s, T, free) is a run of entries; a matrix (X, U) keeps its shape.
+        shapes = [(r,) if c == 1 else (r, c) for r, c in B.shapes]
+        return Layout.from_sizes(zip(B.names, shapes, strict=True))
 
     @cached_property
     def rows(self) -> Layout:
