@@ -160,3 +160,21 @@ def test_orbit_arcs_carry_their_inputs(kind):
     for arc in sol.transcription.orbit(sol.w):
         assert arc.u.shape == (1, arc.t.size)  # one input (hip_torque) at every sample
         assert np.all(arc.u == 0.0)
+
+
+def test_every_result_reads_the_one_status_table():
+    # Source: gaitopt.result.STATUS, the one table of codes and advice; a branch that has no gait
+    # to start from (the rimless wheel does not roll at slope 0.03, README) takes its start's
+    # code, and a multi-start's per-start codes are entries of the same table.
+    from gaitopt.optimize.result import START_STATUS, StartRecord
+    from gaitopt.orbit.solve import OrbitSolution
+    from gaitopt.result import STATUS
+
+    branch = gaitopt.continuation(gaitopt.model("rimless_wheel", slope=0.03), "slope", to=0.05)
+    start = gaitopt.find_limit_cycle(gaitopt.model("rimless_wheel", slope=0.03))
+    assert not branch.success and branch.status == start.status != "success"
+    assert branch.advice == STATUS[start.status]
+    assert all(START_STATUS[k] == STATUS[k] for k in START_STATUS)
+    assert StartRecord(0, "no_start").advice == STATUS["no_start"]
+    solved = _solved("shooting")
+    assert isinstance(solved, OrbitSolution) and solved.advice == STATUS["success"]

@@ -308,9 +308,7 @@ class ShootingProblem(SymbolicShooting):
             t = t0 + np.linspace(0.0, durations[k], X.shape[1])
             phase = self.phases[i]
             U = np.tile(np.asarray(u, dtype=float).reshape(-1, 1), (1, X.shape[1]))
-            arcs.append(
-                OrbitArc(i, phase.name, phase.states, t, X, phase.transitions[0].name, U)
-            )
+            arcs.append(OrbitArc(i, phase.name, phase.states, t, X, phase.transitions[0].name, U))
             t0 += durations[k]
         return arcs
 
