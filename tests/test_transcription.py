@@ -178,3 +178,28 @@ def test_every_result_reads_the_one_status_table():
     assert StartRecord(0, "no_start").advice == STATUS["no_start"]
     solved = _solved("shooting")
     assert isinstance(solved, OrbitSolution) and solved.advice == STATUS["success"]
+
+
+def test_layout_refuses_gaps_overlaps_and_repeated_names():
+    from gaitopt.orbit import Block
+
+    assert Layout.from_sizes([("s", 3), ("X0", (4, 2)), ("T0", 1)]).size == 12
+    with pytest.raises(ValueError, match="used twice"):
+        Layout.from_sizes([("s", 2), ("s", 1)])
+    with pytest.raises(ValueError, match="starts at 3, not at 2"):
+        Layout((Block("s", slice(0, 2), (2,)), Block("T0", slice(3, 4), (1,))), 4)
+    with pytest.raises(ValueError, match="cover 2 entries of 3"):
+        Layout((Block("s", slice(0, 2), (2,)),), 3)
+    with pytest.raises(KeyError, match="no block 'U0'"):
+        Layout.from_sizes([("s", 2)])["U0"]
+
+
+def test_ipopt_on_the_shooting_transcription_agrees_with_newton():
+    # Source: two solvers of the same square system (orbit/newton.py, orbit/ipopt.py with no
+    # objective: a feasibility problem); both stop at residuals ≤ 1e-12, the Jacobian is well
+    # conditioned, so the solutions agree to 1e-9.
+    t = _transcription("shooting")
+    newton = _solved("shooting")
+    ipopt = solve_gait(t, t.guess(), method="ipopt", tol=1e-8, verify=False)
+    assert ipopt.status == "success", ipopt.message
+    assert np.max(np.abs(ipopt.w - newton.w)) <= 1e-9
