@@ -7,7 +7,7 @@ neither.
 
 The orbit layer, folder by job:
 
-* :mod:`~gaitopt.orbit.transcription` — the :class:`Transcription` protocol (rules 1–8) that
+* :mod:`~gaitopt.orbit.transcription` — the :class:`Transcription` protocol (rules 1–9) that
   multiple shooting (:class:`gaitopt.shooting.transcription.ShootingTranscription`) and Radau
   collocation (:class:`gaitopt.optimize.transcription.CollocationTranscription`) implement;
   :mod:`~gaitopt.orbit.layout` — its named blocks (:class:`Layout`);

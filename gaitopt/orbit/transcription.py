@@ -43,6 +43,8 @@ Rules (what an implementation must do; like SciPy's ``OdeSolver`` contract):
    duration as expressions of ``w`` — what an objective is written in.
 8. **The referee.** ``referee(w, tol)`` simulates the orbit's fixed point with its inputs (the
    constant input, or the profile as a feedforward) by :func:`gaitopt.orbit.referee.referee`.
+9. **A start.** ``guess()`` returns unknowns from a simulation of the model's default start
+   (the front doors' own start), a point to hand :func:`gaitopt.orbit.solve_gait`.
 
 Implementations sit above :mod:`gaitopt.orbit` (in ``gaitopt.shooting`` and
 ``gaitopt.optimize``); this module imports neither.
@@ -157,7 +159,7 @@ class Symbols:
 
 @runtime_checkable
 class Transcription(Protocol):
-    """A periodic orbit of a hybrid model, transcribed (rules 1–8 of the module docstring)."""
+    """A periodic orbit of a hybrid model, transcribed (rules 1–9 of the module docstring)."""
 
     #: The model, with its parameters.
     model: Any
@@ -203,3 +205,5 @@ class Transcription(Protocol):
     def error_estimate(self, w) -> float: ...
 
     def referee(self, w, tol: float) -> Any: ...
+
+    def guess(self) -> np.ndarray: ...
