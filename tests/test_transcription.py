@@ -170,8 +170,9 @@ def test_every_result_reads_the_one_status_table():
     from gaitopt.orbit.solve import OrbitSolution
     from gaitopt.result import STATUS
 
-    branch = gaitopt.continuation(gaitopt.model("rimless_wheel", slope=0.03), "slope", to=0.05)
-    start = gaitopt.find_limit_cycle(gaitopt.model("rimless_wheel", slope=0.03))
+    wheel = gaitopt.model("rimless_wheel", slope=0.03)
+    start = gaitopt.find_limit_cycle(wheel)
+    branch = gaitopt.continuation(wheel, "slope", to=0.05, start=start)
     assert not branch.success and branch.status == start.status != "success"
     assert branch.advice == STATUS[start.status]
     assert all(START_STATUS[k] == STATUS[k] for k in START_STATUS)
