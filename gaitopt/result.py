@@ -9,11 +9,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["Gait", "LimitCycle", "OrbitArc", "STATUS"]
+__all__ = ["Gait", "LimitCycle", "OrbitArc", "STATUS", "status_of"]
 
 #: What a search or an optimisation ended in (``Gait.status``: :attr:`LimitCycle.status`,
-#: :attr:`OptimalGait.status`), and what to try next (diffrax's ``RESULTS``, SciPy's
-#: ``OptimizeResult.status``): one code per way of failing; the message has the details.
+#: :attr:`OptimalGait.status`; :attr:`Branch.status <gaitopt.continuation.Branch.status>`,
+#: :attr:`Curve.status <gaitopt.curves.Curve.status>`, :attr:`OrbitSolution.status
+#: <gaitopt.orbit.solve.OrbitSolution.status>`, a multi-start's ``StartRecord.status``), and
+#: what to try next (diffrax's ``RESULTS``, SciPy's ``OptimizeResult.status``): one code per
+#: way of failing; the message has the details.
 STATUS = {
     "success": "a certified gait: solved, refined, checked on dense samples and verified",
     "no_start": "the simulation from the guess never completes a step (an optimisation: no "
@@ -35,7 +38,23 @@ STATUS = {
     "not_verified": "the independent simulation does not confirm the orbit (its return, its "
     "phase timing or an optimum's cost): tighten the mesh or `tol`, or the gait is too "
     "sensitive to be trusted here",
+    "converged": "one start of a multi-start (an optimisation's `starts`): the solver "
+    "converged on the starts' mesh; the minimum it reached is refined and certified before it "
+    "is reported",
+    "no_special_point": "a bifurcation curve: the branch it starts from has no special point "
+    "of the kind asked for, or the point carries no certified gait: continue the branch "
+    "further (`to`), or start from another gait",
 }
+
+
+def status_of(result: Any) -> str:
+    """The :data:`STATUS` code of any result with ``success`` and ``status`` (a gait, a
+    :class:`~gaitopt.continuation.Branch`, a :class:`~gaitopt.curves.Curve`): its own code, else
+    ``"success"`` or ``"not_converged"`` by ``success``."""
+    code = getattr(result, "status", "") or ("success" if result.success else "not_converged")
+    if code not in STATUS:
+        raise ValueError(f"status {code!r} is not one of {list(STATUS)}")
+    return code
 
 
 class Gait:
@@ -87,6 +106,9 @@ class OrbitArc:
         States, ``len(states) × len(t)``.
     transition : str
         The transition that ends the arc.
+    u : numpy.ndarray or None
+        Inputs at the same samples, ``len(model.inputs) × len(t)``: the per-step input held
+        (a :class:`LimitCycle`), or the input profile (an :class:`~gaitopt.OptimalGait`).
     """
 
     phase: int
@@ -95,6 +117,7 @@ class OrbitArc:
     t: np.ndarray
     x: np.ndarray
     transition: str
+    u: np.ndarray | None = None
 
 
 @dataclass

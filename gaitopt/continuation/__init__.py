@@ -139,7 +139,7 @@ def continuation(
         first = find_limit_cycle(model, start, steps=steps, verify=verify, tol=tol)
     branch = Branch(model, param, first.steps)
     if not first.success:
-        branch.success = False
+        branch.success, branch.status = False, first.status or "not_converged"
         branch.message = f"no gait to start from: {first.message}"
         return branch
     direction = 1.0 if to is None or to > lam0 else -1.0

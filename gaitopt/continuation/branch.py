@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
-from ..result import LimitCycle
+from ..result import STATUS, LimitCycle, status_of
 
 __all__ = ["Branch", "PseudoArclength", "SpecialPoint"]
 
@@ -126,6 +126,10 @@ class Branch:
         How the branch ended (each direction).
     success : bool
         Whether the start was a certified gait and at least one point was computed.
+    status : str
+        A code of the one table :data:`gaitopt.result.STATUS`: the start gait's where there was
+        none to start from; empty means ``"success"`` (or ``"not_converged"`` when
+        ``success`` is False). :attr:`advice` reads the table.
     """
 
     model: HybridModel
@@ -136,6 +140,12 @@ class Branch:
     children: list[Branch] = field(default_factory=list)
     message: str = ""
     success: bool = True
+    status: str = ""
+
+    @property
+    def advice(self) -> str:
+        """What :data:`gaitopt.result.STATUS` says about the branch's status."""
+        return STATUS[status_of(self)]
 
     # -- columns ------------------------------------------------------------------------------
     @property

@@ -157,12 +157,12 @@ def bifurcation_curve(
         )
         curve = Curve(model, kind, (path1, path2), steps=steps)
         if not branch.success:
-            curve.success, curve.message = False, branch.message
+            curve.success, curve.message, curve.status = False, branch.message, branch.status
             return curve
         special = next((sp for sp in branch.special_points if sp.kind == kind), None)
         first = branch.cycles[0]
         if special is None:
-            curve.success = False
+            curve.success, curve.status = False, "no_special_point"
             found = ", ".join(f"{sp.kind} at {sp.param:.8g}" for sp in branch.special_points)
             curve.message = (
                 f"no {kind} point on the branch in {param} from {branch.params[0]:.6g} to "
@@ -197,12 +197,13 @@ def curve_from(
     )  # fmt: skip
     if cycle is None or not cycle.success:
         curve.success, curve.message = False, "the special point carries no certified gait"
+        curve.status = "no_special_point"
         return curve
     boundary, extra = None, ()
     if kind == "boundary":
         boundary, why, extra, sigma = _vanishing_quantity(cycle, first)
         if boundary is None:
-            curve.success = False
+            curve.success, curve.status = False, "singular"
             curve.message = f"the boundary cannot be followed as a curve: {why}"
             curve.condition = why
             return curve

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..continuation import SpecialPoint
 from ..hybrid import HybridModel
-from ..result import LimitCycle
+from ..result import STATUS, LimitCycle, status_of
 from .system import ParameterPath
 
 __all__ = ["Curve", "CurvePoint"]
@@ -89,6 +89,12 @@ class Curve:
         How the curve ended.
     success : bool
         Whether a start was found and at least one curve point certified.
+    steps : int
+        Returns to the section per orbit.
+    status : str
+        A code of the one table :data:`gaitopt.result.STATUS` (``"no_special_point"`` where the
+        branch has no point to start from); empty means ``"success"`` (or ``"not_converged"``
+        when ``success`` is False). :attr:`advice` reads the table.
     """
 
     model: HybridModel
@@ -102,6 +108,12 @@ class Curve:
     message: str = ""
     success: bool = True
     steps: int = 1
+    status: str = ""
+
+    @property
+    def advice(self) -> str:
+        """What :data:`gaitopt.result.STATUS` says about the curve's status."""
+        return STATUS[status_of(self)]
 
     @property
     def param(self) -> str:

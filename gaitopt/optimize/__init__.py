@@ -2,7 +2,10 @@
 
 * :mod:`~gaitopt.optimize.problem` — the statement (cost, fixed/free period, step length, speed,
   bounds, free parameters);
-* :mod:`~gaitopt.optimize.collocation` — its Legendre–Gauss–Radau transcription;
+* :mod:`~gaitopt.optimize.collocation` — its Legendre–Gauss–Radau transcription (with
+  ``collocation_rows``, ``collocation_cost``, ``collocation_limits``, ``collocation_kernels``),
+  and :mod:`~gaitopt.optimize.transcription` — the same as a
+  :class:`gaitopt.orbit.Transcription` (:class:`CollocationTranscription`);
 * :mod:`~gaitopt.optimize.solve` — IPOPT with exact derivatives, multi-start, mesh refinement;
 * :mod:`~gaitopt.optimize.verify`, :mod:`~gaitopt.optimize.certify` and
   :mod:`~gaitopt.optimize.floquet` — trust: the common certificate and referee of
@@ -28,12 +31,14 @@ from .profile import InputProfile
 from .result import Minimum, OptimalGait, StartRecord
 from .solve import optimize_gait, solve_problem
 from .stabilisation import Stabilisation, stabilise
+from .transcription import CollocationTranscription
 
 __all__ = [
     "optimize_gait",
     "solve_problem",
     "GaitProblem",
     "Collocation",
+    "CollocationTranscription",
     "RadauMesh",
     "Arc",
     "InputProfile",

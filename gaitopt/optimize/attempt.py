@@ -12,6 +12,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..caching import lru_by_key
 from .active import _violation
 from .collocation import Arc, Collocation, RadauMesh
 from .guess import NoStart, _start_guess
@@ -40,10 +41,9 @@ _IPOPT = {
     # arccos) is IPOPT's to reject and back off from; CasADi need not print each one.
     "show_eval_warnings": False,
 }
-#: Transcriptions kept with their compiled NLPs, by statement and mesh (least recently used
-#: dropped first): each holds a compiled NLP of a few MB.
-_COLLOCATIONS: dict[tuple, Collocation] = {}
-_SOLVERS: dict[tuple, ca.Function] = {}
+#: Transcriptions kept with their compiled NLPs, by statement and mesh: each holds a compiled NLP
+#: of a few MB, so at most this many (gaitopt's one cache rule, :mod:`gaitopt.caching`: the least
+#: recently used dropped first).
 _CACHED_TRANSCRIPTIONS = 4
 
 
@@ -69,38 +69,40 @@ def _statement_key(problem: GaitProblem, values: bool = True) -> tuple:
     return tuple(items)
 
 
+def _collocation_key(
+    problem: GaitProblem, mesh: RadauMesh, structure: list[list[Arc]] | None = None
+) -> tuple:
+    return (_statement_key(problem), mesh, repr(structure))
+
+
+@lru_by_key(_CACHED_TRANSCRIPTIONS, _collocation_key)
 def _collocation(
     problem: GaitProblem, mesh: RadauMesh, structure: list[list[Arc]] | None = None
 ) -> Collocation:
     """The transcription of a statement on a mesh, from a small cache: a repeated solve of the
     same statement (a second call, the points a library revisits) reuses the transcription and
     its compiled NLP (``nlpsol`` takes about 0.25 s to build for the compass gait)."""
-    key = (_statement_key(problem), mesh, repr(structure))
-    col = _COLLOCATIONS.pop(key, None)
-    if col is None:
-        col = Collocation(problem, mesh, structure)
-    _COLLOCATIONS[key] = col  # most recently used last
-    while len(_COLLOCATIONS) > _CACHED_TRANSCRIPTIONS:
-        _COLLOCATIONS.pop(next(iter(_COLLOCATIONS)))
-    return col
+    return Collocation(problem, mesh, structure)
 
 
+def _solver_key(col: Collocation) -> tuple:
+    return (_statement_key(col.problem, values=False), col.mesh, repr(col.structure))
+
+
+@lru_by_key(_CACHED_TRANSCRIPTIONS, _solver_key)
 def _solver(col: Collocation) -> ca.Function:
     """IPOPT on the transcription's NLP, built once per NLP structure: transcriptions of
     statements that differ only in the fixed period, step length or speed share it (their values are
     the bounds ``lbg = ubg`` of their rows, passed with each solve)."""
-    key = (_statement_key(col.problem, values=False), col.mesh, repr(col.structure))
-    solver = _SOLVERS.pop(key, None)
-    if solver is None:
-        if col.node_blocks:  # exact derivatives assembled from the compiled node kernels
-            f, g = col.outer
-            solver = split_solver("gait", col._w, col._p, f, g, col.node_blocks, _IPOPT)
-        else:
-            solver = ca.nlpsol("gait", "ipopt", col.nlp, _IPOPT)
-    _SOLVERS[key] = solver  # most recently used last
-    while len(_SOLVERS) > _CACHED_TRANSCRIPTIONS:
-        _SOLVERS.pop(next(iter(_SOLVERS)))
-    return solver
+    if col.node_blocks:  # exact derivatives assembled from the compiled node kernels
+        f, g = col.outer
+        return split_solver("gait", col._w, col._p, f, g, col.node_blocks, _IPOPT)
+    return ca.nlpsol("gait", "ipopt", col.nlp, _IPOPT)
+
+
+#: The caches themselves (``clear()`` empties one).
+_COLLOCATIONS = _collocation.cache
+_SOLVERS = _solver.cache
 
 
 def _run(col: Collocation, w0: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, dict[str, Any]]:

@@ -16,7 +16,6 @@ from typing import Any
 import numpy as np
 
 from ..orbit.referee import TIGHT, referee
-from ..result import OrbitArc
 from ..stability import is_stable
 from .active import _active
 from .arcs import saturated_spans
@@ -29,6 +28,7 @@ from .verify import (
     check_dense,
     feedforward_of,
     map_jacobian_fd,
+    orbit_arcs,
     profiles,
     simulated_cost,
 )
@@ -50,21 +50,9 @@ def _certify(
     profs = profiles(col, sol)
     period = sol["period"]
     step_length = sol["distance"] / problem.steps if problem.footholds() else None
-    t_grid, u_grid, orbit = [], [], []
-    t0 = 0.0
-    dense = np.linspace(0.0, 1.0, col.N * 8 + 1)
-    for k, i in enumerate(col.chain):
-        X, U = col.evaluate(sol["X"][k], sol["U"][k], dense, sol["breaks"][k])
-        t = t0 + dense * sol["T"][k]
-        arc = OrbitArc(
-            i, model.phases[i].name, model.phases[i].states, t, X,
-            model.phases[i].transitions[0].name,
-        )  # fmt: skip
-        arc.u = U  # type: ignore[attr-defined]
-        orbit.append(arc)
-        t_grid.append(t if k == 0 else t[1:])
-        u_grid.append(U if k == 0 else U[:, 1:])
-        t0 += sol["T"][k]
+    orbit = orbit_arcs(col, sol)
+    t_grid = [arc.t if k == 0 else arc.t[1:] for k, arc in enumerate(orbit)]
+    u_grid = [arc.u if k == 0 else arc.u[:, 1:] for k, arc in enumerate(orbit)]
     t_all = np.concatenate(t_grid)
     u_all = np.hstack(u_grid)
     inputs = {"time": t_all.tolist(), **{n: u_all[j].tolist() for j, n in enumerate(model.inputs)}}

@@ -136,7 +136,7 @@ def _guess_from_gait(col: Collocation, gait: OptimalGait) -> np.ndarray:
         states.append(
             lambda t, arc=arc, tau=tau: np.array([np.interp(t, tau, row) for row in arc.x])
         )
-        us = arc.u  # type: ignore[attr-defined]
+        us = arc.u
         inputs.append(lambda t, us=us, tau=tau: np.array([np.interp(t, tau, row) for row in us]))
     s0 = model.section_coordinates_of(model.state_vector(gait.fixed_point))
     free = np.array([gait.params.get(n, model.params[n]) for n in problem.free])

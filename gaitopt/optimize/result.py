@@ -12,12 +12,9 @@ from ..result import STATUS, Gait
 
 __all__ = ["OptimalGait", "Minimum", "StartRecord", "START_STATUS"]
 
-#: How one start of a multi-start ended (:attr:`StartRecord.status`).
-START_STATUS = {
-    "converged": "IPOPT converged on the starts' mesh; the start is one of a minimum's starts",
-    "not_converged": "IPOPT stopped without converging (the message names the worst constraint)",
-    "no_start": "no guess could be built: the perturbed start is not a state of the model",
-}
+#: How one start of a multi-start ended (:attr:`StartRecord.status`): the three codes of the one
+#: table :data:`gaitopt.result.STATUS` a start can end in, with its advice.
+START_STATUS = {code: STATUS[code] for code in ("converged", "not_converged", "no_start")}
 
 
 @dataclass
@@ -96,6 +93,11 @@ class StartRecord:
     cost: float | None = None
     minimum: int | None = None
     iterations: int = 0
+
+    @property
+    def advice(self) -> str:
+        """What :data:`gaitopt.result.STATUS` says about :attr:`status`."""
+        return STATUS[self.status]
 
     def to_json(self) -> dict[str, Any]:
         """Plain JSON types."""

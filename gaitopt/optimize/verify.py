@@ -20,11 +20,19 @@ import casadi as ca
 import numpy as np
 
 from ..orbit.certificate import DenseArc, certify_orbit
+from ..result import OrbitArc
 from ..simulation import Simulation, simulate
 from .collocation import Collocation
 from .problem import GaitProblem
 
-__all__ = ["check_dense", "dense_arcs", "simulate_gait", "simulated_cost", "map_jacobian_fd"]
+__all__ = [
+    "check_dense",
+    "dense_arcs",
+    "orbit_arcs",
+    "simulate_gait",
+    "simulated_cost",
+    "map_jacobian_fd",
+]
 
 _SAMPLES = 24  # per mesh interval for the dense checks
 
@@ -56,6 +64,22 @@ def dense_arcs(col: Collocation, sol: dict[str, Any], samples: int = _SAMPLES) -
         label = f"phase '{model.phases[i].name}'{step}"
         out.append(DenseArc(i, label, T, t0 + tn * T, X, U))
         t0 += T
+    return out
+
+
+def orbit_arcs(col: Collocation, sol: dict[str, Any], samples: int = 8) -> list[OrbitArc]:
+    """The optimum's orbit for results and plots: one :class:`~gaitopt.OrbitArc` per phase, its
+    state and input polynomials at ``samples`` uniform samples per mesh interval (and the
+    phase's ends), times in s since the orbit's section."""
+    model = col.model
+    dense = np.linspace(0.0, 1.0, col.N * samples + 1)
+    out, t0 = [], 0.0
+    for k, i in enumerate(col.chain):
+        X, U = col.evaluate(sol["X"][k], sol["U"][k], dense, sol["breaks"][k])
+        phase = model.phases[i]
+        t = t0 + dense * sol["T"][k]
+        out.append(OrbitArc(i, phase.name, phase.states, t, X, phase.transitions[0].name, U))
+        t0 += sol["T"][k]
     return out
 
 

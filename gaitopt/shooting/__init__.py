@@ -5,7 +5,10 @@ The problem and the methods are separate modules:
 * :mod:`~gaitopt.shooting.problem` — :class:`MultipleShooting` (the discretisation) and
   :class:`ShootingProblem` (unknowns, residual, Jacobians, bounds, objective slot, and the map
   back to phases and orbits);
-* :mod:`~gaitopt.shooting.newton` — Newton and IPOPT on a problem;
+* :mod:`~gaitopt.shooting.newton` — Newton and IPOPT on a problem (Newton itself is
+  :mod:`gaitopt.orbit.newton`'s);
+* :mod:`~gaitopt.shooting.transcription` — the problem as a :class:`gaitopt.orbit.Transcription`
+  (:class:`ShootingTranscription`: bound to a model's parameters and an input);
 * :mod:`~gaitopt.shooting.certify` — the checks that make a solution a gait (the common
   certificate of :mod:`gaitopt.orbit` on the RK samples), and its multipliers;
 * :mod:`~gaitopt.shooting.verify` — the independent simulation (the common referee);
@@ -22,12 +25,14 @@ from .certify import certify, check_constraints
 from .gait import solve_gait
 from .newton import METHODS, Solution
 from .problem import MultipleShooting, ShootingProblem, shooting_problem
+from .transcription import ShootingTranscription
 from .verify import verify_by_simulation
 
 __all__ = [
     "METHODS",
     "MultipleShooting",
     "ShootingProblem",
+    "ShootingTranscription",
     "Solution",
     "certify",
     "check_constraints",

@@ -1,6 +1,8 @@
 """The methods that solve a :class:`~gaitopt.shooting.problem.ShootingProblem`: Newton on the
-square shooting system (the compiled kernels' Jacobian, or CasADi's ``rootfinder`` where a model
-has none) and IPOPT (``nlpsol``) with positive durations and an optional objective."""
+square shooting system (:mod:`gaitopt.orbit.newton` on the compiled kernels' Jacobian, or
+CasADi's ``rootfinder`` where a model has none) and IPOPT (``nlpsol``) with positive durations
+and an optional objective.  The methods for any transcription are :mod:`gaitopt.orbit.newton`
+and :mod:`gaitopt.orbit.ipopt`."""
 
 from __future__ import annotations
 
@@ -11,6 +13,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import GaitoptInputError
+from ..orbit.newton import newton as _orbit_newton
 from .symbolic import NEWTON_OPTIONS
 
 __all__ = ["METHODS", "Solution", "newton", "solve"]
@@ -91,16 +94,11 @@ def solve(problem: ShootingSystem, w0, u, p, *, method="newton", objective=None,
     return Solution(w, u, bool(stats["success"]), int(stats["iter_count"]))
 
 
-#: Newton's stopping tests (as CasADi's ``rootfinder`` "newton" options before): the largest
-#: residual, the largest step.
-_ABSTOL, _ABSTOL_STEP = NEWTON_OPTIONS["abstol"], NEWTON_OPTIONS["abstolStep"]
-
-
 def newton(problem: ShootingSystem, w0, u, p, *, line_search: bool = False):
-    """Newton on the compiled shooting system: each iteration one compiled call for ``F`` and
-    ``∂F/∂w``, a dense solve, and (with ``line_search``) halving the step until ``‖F‖₂``
-    decreases.  Stops where ``max |F| ≤ 1e-12`` or ``max |step| ≤ 1e-15``; 30 iterations
-    (100 with line search).
+    """Newton on the compiled shooting system (:func:`gaitopt.orbit.newton.newton`: each
+    iteration one compiled call for ``F`` and ``∂F/∂w``, a dense solve, and with
+    ``line_search`` halving the step until ``‖F‖₂`` decreases).  Stops where
+    ``max |F| ≤ 1e-12`` or ``max |step| ≤ 1e-15``; 30 iterations (100 with line search).
 
     Returns
     -------
@@ -108,33 +106,11 @@ def newton(problem: ShootingSystem, w0, u, p, *, line_search: bool = False):
     the number of Jacobians evaluated and the evaluation at ``w`` (reused by the caller).
     """
     asm = problem.assembly()
-    max_iter = 100 if line_search else NEWTON_OPTIONS["max_iter"]
-    w = np.array(w0, dtype=float).ravel()
-    ev = None
-    for iteration in range(1, max_iter + 1):
-        ev = ev if ev is not None else asm(w, u, p)
-        F = ev.F
-        if not (np.all(np.isfinite(F)) and np.all(np.isfinite(ev.F_w))):
-            return w, False, iteration, ev
-        if float(np.max(np.abs(F))) <= _ABSTOL:
-            return w, True, iteration, ev
-        try:
-            step = np.linalg.solve(ev.F_w, F)
-        except np.linalg.LinAlgError:  # exactly singular (a family of orbits): least squares
-            step = np.linalg.lstsq(ev.F_w, F, rcond=None)[0]
-        if float(np.max(np.abs(step))) <= _ABSTOL_STEP:
-            return w, True, iteration, ev
-        if not line_search:
-            w, ev = w - step, None
-            continue
-        norm, alpha = float(F @ F), 1.0
-        while True:
-            trial = asm(w - alpha * step, u, p)
-            if (np.all(np.isfinite(trial.F)) and float(trial.F @ trial.F) < norm) or alpha < 1e-4:
-                break
-            alpha /= 2
-        w, ev = w - alpha * step, trial
-    return w, False, max_iter, ev
+    return _orbit_newton(
+        lambda w: asm(w, u, p), w0, line_search=line_search,
+        max_iter=NEWTON_OPTIONS["max_iter"], abstol=NEWTON_OPTIONS["abstol"],
+        abstol_step=NEWTON_OPTIONS["abstolStep"],
+    )  # fmt: skip
 
 
 def _newton(solver: ca.Function, w0, u, p) -> tuple[np.ndarray, bool, int]:

@@ -295,7 +295,8 @@ class ShootingProblem(SymbolicShooting):
 
     def orbit(self, w, u, p) -> list[OrbitArc]:
         """The orbit's dense samples, one :class:`~gaitopt.OrbitArc` per stage (times from 0 at
-        the section, s), from the same integrator as the residual."""
+        the section, s; the input ``u`` held at every sample), from the same integrator as the
+        residual."""
         samples = self.sample_numeric(w, u, p)
         durations = self.durations(w)
         q = self.disc.dense
@@ -307,7 +308,8 @@ class ShootingProblem(SymbolicShooting):
             X = X[:, keep]
             t = t0 + np.linspace(0.0, durations[k], X.shape[1])
             phase = self.phases[i]
-            arcs.append(OrbitArc(i, phase.name, phase.states, t, X, phase.transitions[0].name))
+            U = np.tile(np.asarray(u, dtype=float).reshape(-1, 1), (1, X.shape[1]))
+            arcs.append(OrbitArc(i, phase.name, phase.states, t, X, phase.transitions[0].name, U))
             t0 += durations[k]
         return arcs
 
