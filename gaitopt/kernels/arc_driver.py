@@ -289,7 +289,8 @@ CASADI_SYMBOL_EXPORT int gaitopt_arc(void** fns, const int* dims, const double* 
     if (c.excursion.f(c.excursion.arg, c.excursion.res, c.excursion.iw, c.excursion.w, 0))
       goto done;
     for (k = 0; k < n_tr; k++) /* _short_excursion: tau/4 with tau = 2|g1|/g2 */
-      if (!armed[k] && g1[k] < 0 && 0 < g2[k]) bound = gaitopt_min(bound, 0.5 * fabs(g1[k]) / g2[k]);
+      if (!armed[k] && g1[k] < 0 && 0 < g2[k])
+        bound = gaitopt_min(bound, 0.5 * fabs(g1[k]) / g2[k]);
     *shortb = (isfinite(bound) && bound > 0) ? bound : 0.0;
     *max_step = *shortb > 0 ? *shortb : INFINITY;
   }
@@ -337,7 +338,8 @@ CASADI_SYMBOL_EXPORT int gaitopt_arc(void** fns, const int* dims, const double* 
     grid[GAITOPT_CHECKS] = t_new;
     for (k = 0; k < m; k++)
       for (j = 0; j < GAITOPT_CHECKS; j++) {
-        double s = dirs[k] * G[j * m + k], before = j ? signed_[k * GAITOPT_CHECKS + j - 1] : values[k];
+        double s = dirs[k] * G[j * m + k];
+        double before = j ? signed_[k * GAITOPT_CHECKS + j - 1] : values[k];
         signed_[k * GAITOPT_CHECKS + j] = s;
         if (before < 0 && s >= 0) crossing = 1;
       }
@@ -355,7 +357,8 @@ CASADI_SYMBOL_EXPORT int gaitopt_arc(void** fns, const int* dims, const double* 
           double current = signed_[k * GAITOPT_CHECKS + j - 1];
           if (was_armed && previous < 0 && 0 <= current) { /* confirm on the dense output */
             double a = gaitopt_g(&c, k, grid[j - 1]);
-            double b = j < GAITOPT_CHECKS ? gaitopt_g(&c, k, grid[j]) : gaitopt_signed(&c, k, y_new);
+            double b = j < GAITOPT_CHECKS ? gaitopt_g(&c, k, grid[j])
+                                          : gaitopt_signed(&c, k, y_new);
             previous = a; current = b;
           }
           if (was_armed && previous < 0 && 0 <= current) {
