@@ -1,0 +1,104 @@
+"""The compiled simulation (one C call per arc, :mod:`gaitopt.simulation.compiled`) against the
+Python loop (:func:`gaitopt.simulation.phase.integrate_phase` driving SciPy's DOP853), on every
+registered model.
+
+Both run the same method, the same step-size control, the same event checks and the same root
+location, so they take the same steps: their events must agree to 1e-12 (s, and in the states'
+units, relative to 1 + |x|) — not to the integration tolerance (1e-11), which is what two
+*different* integrators would agree to.  The remaining differences are rounding: the compiled
+event functions and resets against CasADi's interpreter, and Brent's method in C against
+SciPy's ``brentq`` (located to ~1e-15 either way).  The fallback where there is no C compiler
+is the Python loop itself (forced with ``GAITOPT_COMPILE=0``).
+"""
+
+import numpy as np
+import pytest
+
+import gaitopt
+from gaitopt.errors import GaitoptInputError
+from gaitopt.models import model_names
+from gaitopt.simulation import simulate
+
+# Events agree to this (s; states: relative to 1 + |x|): see the module docstring.
+TOL = 1e-12
+
+
+def _agree(a, b) -> None:
+    assert a.status == b.status, (a.message, b.message)
+    assert len(a.events) == len(b.events) and len(a.arcs) == len(b.arcs)
+    for ea, eb in zip(a.events, b.events, strict=True):
+        assert ea.transition == eb.transition and ea.phase == eb.phase
+        assert abs(ea.t - eb.t) <= TOL * (1 + abs(eb.t))
+        scale = 1 + np.abs(eb.state_before)
+        assert np.all(np.abs(ea.state_before - eb.state_before) <= TOL * scale)
+        if eb.state_after is not None:
+            scale = 1 + np.abs(eb.state_after)
+            assert np.all(np.abs(ea.state_after - eb.state_after) <= TOL * scale)
+    for aa, ab in zip(a.arcs, b.arcs, strict=True):
+        # same steps: the dense output on the same pieces
+        assert len(aa.solution.interpolants) == len(ab.solution.interpolants)
+        t = np.linspace(ab.t0, ab.t1, 7)
+        xa, xb = aa.solution(t), ab.solution(t)
+        assert np.all(np.abs(xa - xb) <= TOL * (1 + np.abs(xb)))
+    assert np.allclose(a.section_times, b.section_times, rtol=0, atol=TOL * 10)
+
+
+@pytest.mark.parametrize("name", model_names())
+def test_compiled_arcs_take_the_python_loops_steps_and_events(name):
+    model = gaitopt.model(name)
+    python = simulate(model, steps=3, backend="python")
+    compiled = simulate(model, steps=3, backend="compiled")
+    _agree(compiled, python)
+
+
+@pytest.mark.parametrize("name", ["compass_gait", "slip", "rimless_wheel"])
+def test_a_guess_simulation_agrees_too(name):
+    # The shooting's guess: looser tolerances, no unilateral constraints (the "g" event set).
+    model = gaitopt.model(name)
+    options = dict(steps=2, rtol=1e-8, atol=1e-9, constraints=False)
+    _agree(
+        simulate(model, backend="compiled", **options),
+        simulate(model, backend="python", **options),
+    )
+
+
+@pytest.mark.parametrize(
+    "start, options, status",
+    [
+        (None, {"max_phase_time": 0.05}, "timeout"),  # a phase cut short
+        # a heel strike, then the stance foot lifts off (a unilateral constraint's event)
+        ({"stance": 0.2, "stance_dot": -0.1, "swing_dot": 0.0}, {}, "fell"),
+    ],
+)
+def test_a_timeout_and_a_fall_agree(start, options, status):
+    model = gaitopt.model("compass_gait")
+    python = simulate(model, start, steps=2, backend="python", **options)
+    assert python.status == status
+    _agree(simulate(model, start, steps=2, backend="compiled", **options), python)
+
+
+def test_without_a_compiler_the_python_loop_runs(monkeypatch):
+    from gaitopt.kernels.arcs import arc_library
+
+    model = gaitopt.model("compass_gait")
+    reference = simulate(model, steps=2, backend="python")
+    monkeypatch.setenv("GAITOPT_COMPILE", "0")
+    arc_library.cache_clear()
+    try:
+        assert arc_library(type(model)) is None
+        fallback = simulate(model, steps=2)  # backend "auto": the Python loop
+        # the same loop as the reference: bit for bit
+        assert [e.t for e in fallback.events] == [e.t for e in reference.events]
+        with pytest.raises(GaitoptInputError, match="backend"):
+            simulate(model, steps=2, backend="compiled")
+    finally:
+        monkeypatch.delenv("GAITOPT_COMPILE")
+        arc_library.cache_clear()
+
+
+def test_bad_backend_is_refused():
+    model = gaitopt.model("compass_gait")
+    with pytest.raises(GaitoptInputError, match="backend"):
+        simulate(model, steps=1, backend="fortran")
+    with pytest.raises(GaitoptInputError, match="compiled"):
+        simulate(model, steps=1, backend="compiled", method="RK45")
