@@ -1,0 +1,132 @@
+"""The simulation's two backends, per model, in one run (issue 23 item 1).
+
+For each model, ``gaitopt.simulate(model, steps=STEPS)`` from the model's default start with
+``backend="python"`` (SciPy's DOP853 stepped from Python, each step one compiled call) and with
+``backend="compiled"`` (each arc one C call: :mod:`gaitopt.simulation.compiled`), alternating,
+``repeats`` times each after one warm-up call of each (the libraries loaded, nothing compiled in
+the timed calls).  Reported per model: the median wall time of each, their ratio (the speed-up),
+the integrator steps taken (the same for both: same method and control), the time per step of
+each, and the largest difference between their event times (s) — a fast wrong answer shows.
+The minima and their ratio are recorded too: on a machine shared with other work the medians
+include time spent waiting for a core.
+
+Run alone: ``python -m bench.simulate [--repeats N] [--steps N] [--out FILE] [MODEL ...]``
+(default every registered model, ``results/bench_simulate.json``).  The machine is shared: read
+the medians, not single runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from .common import _machine, _median
+
+__all__ = ["run", "table"]
+
+STEPS = 10
+
+
+def _once(model, backend: str, steps: int) -> tuple[float, Any]:
+    from gaitopt.simulation import simulate
+
+    t0 = time.perf_counter()
+    sim = simulate(model, steps=steps, backend=backend)
+    return time.perf_counter() - t0, sim
+
+
+def _model(name: str, repeats: int, steps: int) -> dict[str, Any]:
+    import gaitopt
+
+    model = gaitopt.model(name)
+    times: dict[str, list[float]] = {"python": [], "compiled": []}
+    sims = {}
+    for backend in times:  # warm-up: libraries loaded, phase functions built
+        _, sims[backend] = _once(model, backend, steps)
+    for _ in range(repeats):
+        for backend in times:
+            seconds, _ = _once(model, backend, steps)
+            times[backend].append(seconds)
+    a, b = sims["python"], sims["compiled"]
+    n_steps = sum(len(arc.solution.interpolants) for arc in a.arcs)
+    same = a.status == b.status and len(a.events) == len(b.events)
+    difference = (
+        max((abs(ea.t - eb.t) for ea, eb in zip(a.events, b.events, strict=True)), default=0.0)
+        if same
+        else None
+    )
+    python, compiled = _median(times["python"]), _median(times["compiled"])
+    return {
+        "status": a.status,
+        "events": len(a.events),
+        "integrator_steps": n_steps,
+        "python_s": python,
+        "compiled_s": compiled,
+        "speedup": python / compiled,
+        "python_min_s": min(times["python"]),
+        "compiled_min_s": min(times["compiled"]),
+        "speedup_of_minima": min(times["python"]) / min(times["compiled"]),
+        "python_us_per_step": 1e6 * python / max(n_steps, 1),
+        "compiled_us_per_step": 1e6 * compiled / max(n_steps, 1),
+        "max_event_time_difference_s": difference,
+        "python_runs_s": times["python"],
+        "compiled_runs_s": times["compiled"],
+    }
+
+
+def run(names: list[str] | None = None, repeats: int = 5, steps: int = STEPS) -> dict[str, Any]:
+    """Both backends on each model (see the module docstring)."""
+    from gaitopt.models import model_names
+
+    return {name: _model(name, repeats, steps) for name in names or model_names()}
+
+
+def table(results: dict[str, Any]) -> str:
+    """The medians as printed lines."""
+    lines = [
+        f"{'model':32s} {'status':9s} {'steps':>6s} {'python ms':>10s} {'compiled ms':>12s} "
+        f"{'speed-up':>9s} {'µs/step py':>11s} {'µs/step C':>10s} {'Δt events':>10s}"
+    ]
+    for name, r in results.items():
+        d = r["max_event_time_difference_s"]
+        lines.append(
+            f"{name:32s} {r['status']:9s} {r['integrator_steps']:6d} {1e3 * r['python_s']:10.2f} "
+            f"{1e3 * r['compiled_s']:12.2f} {r['speedup']:8.1f}× {r['python_us_per_step']:11.1f} "
+            f"{r['compiled_us_per_step']:10.1f} {'differ' if d is None else f'{d:.1e}':>10s}"
+        )
+    speedups = sorted(r["speedup"] for r in results.values())
+    if speedups:
+        lines.append(
+            f"speed-up per simulation: median {_median(speedups):.1f}×, "
+            f"range {speedups[0]:.1f}–{speedups[-1]:.1f}×"
+        )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m bench.simulate", description=__doc__)
+    parser.add_argument("models", nargs="*", help="model names (default: every registered one)")
+    parser.add_argument("--repeats", type=int, default=5, help="timed calls per backend")
+    parser.add_argument("--steps", type=int, default=STEPS, help="returns to the section")
+    parser.add_argument("--out", type=Path, default=Path("results/bench_simulate.json"))
+    args = parser.parse_args(argv)
+    results = run(args.models or None, args.repeats, args.steps)
+    record = {
+        "machine": _machine(),
+        "repeats": args.repeats,
+        "steps": args.steps,
+        "simulate": results,
+    }
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(record, indent=2) + "\n")
+    print(table(results))
+    print(f"Wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
