@@ -1,6 +1,7 @@
 """``python -m gaitopt.kernels --warm [--jobs N] [MODEL ...]``: compile (or find in the cache) the
-shooting kernels, the verification's DOP853 steps, the compiled simulation's arcs, the batch simulation's functions and, for a
-model with inputs, the optimiser's node kernels and flow Jacobians
+shooting kernels, the verification's DOP853 steps, the compiled simulation's arc libraries, the
+batch simulation's functions and, for a model with inputs, the optimiser's node kernels and flow
+Jacobians
 (:func:`gaitopt.optimize.collocation.warm_kernels`) of the built-in models, so that no later call
 waits for the compiler.  ``--jobs`` compiles that many models at once (default: the number of
 CPUs); the cache is safe for concurrent compiles."""

@@ -9,6 +9,8 @@ For each phase ``i`` of a model class the library holds CasADi-generated C for
   simulation) ``step_i_c`` — the same DOP853 step as the verification's
   (:func:`gaitopt.dop853.step_function`) — ``events_i_c``, the event functions, and
   ``admissible_i_c``, each transition's admissibility (1 where it has no rule);
+* ``reset_i_k(x, u, p)``, transition ``k``'s reset, and ``start_i(x, u, p) -> (c, ċ)``, the
+  unilateral constraints' values and rates (the checks where a phase begins);
 
 and the hand-written driver ``gaitopt_arc`` (:mod:`gaitopt.kernels.arc_driver`): the adaptive
 steps, error control, dense output, directional event detection and root location of one arc.
@@ -24,6 +26,7 @@ import ctypes
 import json
 import subprocess
 import sys
+from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
 
@@ -57,6 +60,11 @@ def _functions(model_cls) -> list[ca.Function]:
         for k, tr in enumerate(phase.transitions):
             if tr.reset is not None:
                 functions.append(ca.Function(f"reset_{i}_{k}", [x, u, p], [tr.reset(x, u, p)]))
+        if phase.constraints:  # their values and rates where a phase starts
+            values = [c.function(x, u, p)[0] for c in phase.constraints]
+            rates = [rate_along(flow, c.function)(x, u, p) for c in phase.constraints]
+            start = [ca.vertcat(*values), ca.vertcat(*rates)]
+            functions.append(ca.Function(f"start_{i}", [x, u, p], start))
         for constraints in (True, False):
             tag = "c" if constraints else "g"
             events = phase_events(phase, constraints)
@@ -125,13 +133,16 @@ class ArcLibrary:
         self._eval.argtypes = [vp, vp, i, vp, vp, vp, vp, vp]
         self._pointers: dict[tuple[int, bool], ctypes.Array] = {}
         self._functions: dict[str, tuple[int, int, tuple[int, ...]]] = {}
+        self._sizes: dict[str, int] = {}  # each function's state size
         phases = structure.phases
         for i, phase in enumerate(phases):
-            n_tr = len(phase.transitions)
-            self._function(f"excursion_{i}", (n_tr, n_tr))
+            n_tr, n = len(phase.transitions), len(phase.states)
+            self._function(f"excursion_{i}", n, (n_tr, n_tr))
             for k, tr in enumerate(phase.transitions):
                 if tr.reset is not None:
-                    self._function(f"reset_{i}_{k}", (len(phases[tr.target].states),))
+                    self._function(f"reset_{i}_{k}", n, (len(phases[tr.target].states),))
+            if phase.constraints:
+                self._function(f"start_{i}", n, (len(phase.constraints),) * 2)
         for i in range(len(phases)):
             for constraints in (True, False):
                 tag = "c" if constraints else "g"
@@ -144,24 +155,35 @@ class ArcLibrary:
                         table[2 * j + k] = pointer.value
                 self._pointers[(i, constraints)] = table
 
-    def _function(self, name: str, sizes: tuple[int, ...]) -> None:
+    def _function(self, name: str, n: int, sizes: tuple[int, ...]) -> None:
         f, work = (
             ctypes.cast(getattr(self._lib, s), ctypes.c_void_p).value
             for s in (name, f"{name}_work")
         )
         self._functions[name] = (f, work, sizes)
+        self._sizes[name] = n
 
-    def call(self, name: str, x: np.ndarray, u: np.ndarray, p: np.ndarray) -> list[np.ndarray]:
-        """The library's function ``name`` (a reset ``reset_<phase>_<transition>``, or
-        ``excursion_<phase>``) at ``(x, u, p)``: its outputs, compiled."""
+    def function(self, name: str, u: np.ndarray, p: np.ndarray) -> Callable:
+        """The library's function ``name`` at fixed ``u`` and ``p``: ``f(x) -> outputs`` (new
+        arrays), evaluated through buffers allocated here.  ``name`` is a reset
+        ``reset_<phase>_<transition>``, ``excursion_<phase>`` (the transitions' signed guard
+        rates and their rates) or ``start_<phase>`` (the unilateral constraints' values and
+        rates)."""
         f, work, sizes = self._functions[name]
-        x, u, p = (np.ascontiguousarray(a, dtype=float).ravel() for a in (x, u, p))
+        u, p = (np.array(a, dtype=float).ravel() for a in (u, p))
         outs = [np.zeros(k) for k in sizes] + [np.zeros(1)] * (2 - len(sizes))
-        code = self._eval(f, work, len(sizes), address(x), address(u), address(p),
-                          address(outs[0]), address(outs[1]))  # fmt: skip
-        if code:
-            raise RuntimeError(f"the compiled {name} failed (code {code})")
-        return outs[: len(sizes)]
+        x = np.zeros(self._sizes[name])
+        args = (f, work, len(sizes), address(x), address(u), address(p), *map(address, outs[:2]))
+        run = self._eval
+
+        def evaluate(state: np.ndarray, _keep=(u, p)) -> list[np.ndarray]:
+            x[:] = state
+            code = run(*args)
+            if code:
+                raise RuntimeError(f"the compiled {name} failed (code {code})")
+            return [o.copy() for o in outs[: len(sizes)]]
+
+        return evaluate
 
     def pointers(self, phase: int, constraints: bool) -> ctypes.Array:
         """The ``(function, work)`` pointers of phase ``phase``'s step, events, admissibility,

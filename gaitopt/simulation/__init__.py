@@ -25,7 +25,6 @@ import numpy as np
 
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
-from .compiled import integrate_arc, rests_on_guard
 from .phase import PhaseFunctions, _Buffered, _rests_on_guard, integrate_phase
 from .result import Arc, Event, Simulation
 from .zeno import accumulation
@@ -153,6 +152,8 @@ def simulate(
                         f"{len(model.phases)} phase(s), numbered from 0")  # fmt: skip
     rtol, atol = check_positive("rtol", rtol, "1e-11"), check_positive("atol", atol, "1e-12")
     library = _arc_library(model, backend, method, feedforward, feedback)
+    if library is not None:  # each arc one compiled call (imports scipy.integrate, as below)
+        from .compiled import arc_plan, integrate_arc, rests_on_guard, violated_at_start
     max_phase_time = check_positive("max_phase_time", max_phase_time, "30")
     x = _initial_state(model, x0, phase)
     u0 = model.nominal_input() if callable(inputs) else check_inputs(model, inputs)
@@ -208,7 +209,10 @@ def simulate(
         elif feedforward is not None:  # the flow gets its own input buffer, rewritten per call
             funcs._flow = _Buffered(model.phases[phase].flow, np.array(u, dtype=float), p)
             funcs._drive = (feedforward, sec_t[-1] if sec_t else 0.0, max(len(sec_t) - 1, 0))
-        at_start = funcs.violated_at_start(x, t)
+        if library is not None:
+            at_start = violated_at_start(funcs, library, phase, x)
+        else:
+            at_start = funcs.violated_at_start(x, t)
         if at_start is not None:
             constraint = model.phases[phase].constraints[at_start[0] - len(funcs.phase.transitions)]
             sim.events.append(Event(t, phase, constraint.outcome, x.copy(), None))
@@ -271,7 +275,7 @@ def simulate(
         elif feedforward is not None:  # the reset sees the input at the event
             u = np.asarray(feedforward(t - funcs._drive[1], funcs._drive[2]), dtype=float)
         if library is not None:
-            x = library.call(f"reset_{phase}_{fired}", x_minus, u, p)[0]
+            x = arc_plan(funcs, library, phase).reset(fired, x_minus)
         else:
             x = np.asarray(tr.reset(x_minus, u, p), dtype=float).ravel()
         sim.events.append(Event(t, phase, tr.name, x_minus, x.copy()))
