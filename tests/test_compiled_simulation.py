@@ -102,3 +102,25 @@ def test_bad_backend_is_refused():
         simulate(model, steps=1, backend="fortran")
     with pytest.raises(GaitoptInputError, match="compiled"):
         simulate(model, steps=1, backend="compiled", method="RK45")
+
+
+def test_bench_record_and_table(tmp_path):
+    # The bench's fast mode on two models: a well-formed record whose two backends took the same
+    # integrator steps and agree on every event time (1e-12 s, as above).  No timing asserted.
+    import json
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from bench import simulate as bench
+
+    out = tmp_path / "bench_simulate.json"
+    assert bench.main(["compass_gait", "bouncing_ball", "--repeats", "1", "--steps", "2",
+                       "--out", str(out)]) == 0  # fmt: skip
+    record = json.loads(out.read_text())["simulate"]
+    assert set(record) == {"compass_gait", "bouncing_ball"}
+    for entry in record.values():
+        assert entry["status"] == "completed" and entry["integrator_steps"] > 0
+        assert entry["max_event_time_difference_s"] <= TOL
+        assert entry["python_s"] > 0 and entry["compiled_s"] > 0
+    assert "speed-up per simulation" in bench.table(record)
