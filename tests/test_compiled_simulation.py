@@ -77,6 +77,16 @@ def test_a_timeout_and_a_fall_agree(start, options, status):
     _agree(simulate(model, start, steps=2, backend="compiled", **options), python)
 
 
+def test_an_arc_longer_than_the_step_buffers_resumes(monkeypatch):
+    # The driver returns when its step buffers are full and the next call goes on from its
+    # state: with room for 3 steps per call (an arc takes about 20), the same steps and events.
+    from gaitopt.simulation import compiled
+
+    monkeypatch.setattr(compiled, "_CAPACITY", 3)
+    model = gaitopt.model("compass_gait")
+    _agree(simulate(model, steps=2, backend="compiled"), simulate(model, steps=2, backend="python"))
+
+
 def test_without_a_compiler_the_python_loop_runs(monkeypatch):
     from gaitopt.kernels.arcs import arc_library
 
