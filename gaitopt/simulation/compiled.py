@@ -120,6 +120,9 @@ def integrate_arc(
     plan = arc_plan(funcs, library, index)
     n = plan.n
     x0 = np.asarray(x0, dtype=float).ravel()
+    # SciPy's solvers raise rtol to 100 eps (with a warning: scipy.integrate._ivp.common
+    # .validate_tol); so does the driver, to take the same steps
+    rtol = max(float(rtol), 100 * np.finfo(float).eps)
     plan.opts[:] = (rtol, atol, t0, t0 + max_time)
     state = plan.state
     state[:] = 0.0
