@@ -8,8 +8,11 @@ Python, each step one compiled call) and with ``backend="compiled"`` (each arc o
 the timed calls).  Reported per model: the median wall time of each, their ratio (the speed-up),
 the integrator steps taken (the same for both: same method and control), the time per step of
 each, and the largest difference between their event times (s) — a fast wrong answer shows.
-The minima and their ratio are recorded too: on a machine shared with other work the medians
-include time spent waiting for a core.
+The medians of the CPU times (``time.process_time``) and the minima of the wall times, with
+their ratios, are recorded too.  On a machine shared with other work the wall times include
+time spent waiting for a core, which the CPU times do not: the CPU-time ratio is the one to
+read there (a short compiled run may finish within one time slice while a long Python run
+always waits, which inflates the wall-time ratios, the minima's most).
 
 Run alone: ``python -m bench.simulate [--repeats N] [--steps N] [--out FILE] [MODEL ...]``
 (default every registered model, ``results/bench_simulate.json``).  The machine is shared: read
@@ -32,12 +35,12 @@ __all__ = ["run", "table"]
 STEPS = 10
 
 
-def _once(model, x0, backend: str, steps: int) -> tuple[float, Any]:
+def _once(model, x0, backend: str, steps: int) -> tuple[float, float, Any]:
     from gaitopt.simulation import simulate
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     sim = simulate(model, x0, steps=steps, backend=backend)
-    return time.perf_counter() - t0, sim
+    return time.perf_counter() - t0, time.process_time() - c0, sim
 
 
 def _model(name: str, repeats: int, steps: int) -> dict[str, Any]:
@@ -48,13 +51,15 @@ def _model(name: str, repeats: int, steps: int) -> dict[str, Any]:
     # solves its energy map, 70 ms)
     x0 = model.lift(model.default_start())
     times: dict[str, list[float]] = {"python": [], "compiled": []}
+    cpu: dict[str, list[float]] = {"python": [], "compiled": []}
     sims = {}
     for backend in times:  # warm-up: libraries loaded, phase functions built
-        _, sims[backend] = _once(model, x0, backend, steps)
+        _, _, sims[backend] = _once(model, x0, backend, steps)
     for _ in range(repeats):
         for backend in times:
-            seconds, _ = _once(model, x0, backend, steps)
+            seconds, cpu_seconds, _ = _once(model, x0, backend, steps)
             times[backend].append(seconds)
+            cpu[backend].append(cpu_seconds)
     a, b = sims["python"], sims["compiled"]
     n_steps = sum(len(arc.solution.interpolants) for arc in a.arcs)
     same = a.status == b.status and len(a.events) == len(b.events)
@@ -64,6 +69,7 @@ def _model(name: str, repeats: int, steps: int) -> dict[str, Any]:
         else None
     )
     python, compiled = _median(times["python"]), _median(times["compiled"])
+    python_cpu, compiled_cpu = _median(cpu["python"]), _median(cpu["compiled"])
     return {
         "status": a.status,
         "events": len(a.events),
@@ -71,6 +77,9 @@ def _model(name: str, repeats: int, steps: int) -> dict[str, Any]:
         "python_s": python,
         "compiled_s": compiled,
         "speedup": python / compiled,
+        "python_cpu_s": python_cpu,
+        "compiled_cpu_s": compiled_cpu,
+        "speedup_cpu": python_cpu / compiled_cpu if compiled_cpu > 0 else None,
         "python_min_s": min(times["python"]),
         "compiled_min_s": min(times["compiled"]),
         "speedup_of_minima": min(times["python"]) / min(times["compiled"]),
@@ -90,23 +99,29 @@ def run(names: list[str] | None = None, repeats: int = 5, steps: int = STEPS) ->
 
 
 def table(results: dict[str, Any]) -> str:
-    """The medians (and the minima) as printed lines."""
+    """The medians (wall and CPU) and the wall minima as printed lines."""
     lines = [
-        f"{'model':31s} {'status':9s} {'steps':>5s} {'python ms':>9s} {'compiled ms':>11s} "
-        f"{'speed-up':>8s} {'min: py':>8s} {'C':>6s} {'speed-up':>8s} {'µs/step C':>9s} "
+        f"{'model':31s} {'status':9s} {'steps':>5s} {'wall ms: py':>11s} {'C':>6s} {'×':>6s} "
+        f"{'CPU ms: py':>10s} {'C':>6s} {'×':>6s} {'min ms: py':>10s} {'C':>6s} {'×':>6s} "
         f"{'Δt events':>9s}"
     ]
     for name, r in results.items():
         d = r["max_event_time_difference_s"]
+        cpu = r["speedup_cpu"]
         lines.append(
-            f"{name:31s} {r['status']:9s} {r['integrator_steps']:5d} {1e3 * r['python_s']:9.1f} "
-            f"{1e3 * r['compiled_s']:11.2f} {r['speedup']:7.1f}× {1e3 * r['python_min_s']:8.1f} "
-            f"{1e3 * r['compiled_min_s']:6.2f} {r['speedup_of_minima']:7.1f}× "
-            f"{1e6 * r['compiled_min_s'] / max(r['integrator_steps'], 1):9.1f} "
-            f"{'differ' if d is None else f'{d:.1e}':>9s}"
+            f"{name:31s} {r['status']:9s} {r['integrator_steps']:5d} "
+            f"{1e3 * r['python_s']:11.1f} {1e3 * r['compiled_s']:6.2f} {r['speedup']:5.1f}× "
+            f"{1e3 * r['python_cpu_s']:10.1f} {1e3 * r['compiled_cpu_s']:6.2f} "
+            f"{'—' if cpu is None else f'{cpu:5.1f}×':>6s} "
+            f"{1e3 * r['python_min_s']:10.1f} {1e3 * r['compiled_min_s']:6.2f} "
+            f"{r['speedup_of_minima']:5.1f}× {'differ' if d is None else f'{d:.1e}':>9s}"
         )
-    for key, what in (("speedup", "medians"), ("speedup_of_minima", "minima")):
-        values = sorted(r[key] for r in results.values())
+    for key, what in (
+        ("speedup", "wall-time medians"),
+        ("speedup_cpu", "CPU-time medians"),
+        ("speedup_of_minima", "wall-time minima"),
+    ):
+        values = sorted(r[key] for r in results.values() if r[key] is not None)
         if values:
             lines.append(
                 f"speed-up per simulation ({what}): median {_median(values):.1f}×, "
