@@ -123,9 +123,10 @@ def simulate(
     backend : str
         ``"compiled"``: each phase (arc) is integrated in one call of compiled C
         (:mod:`gaitopt.simulation.compiled`: the same DOP853 steps, event checks and root
-        location as the Python loop, 10–40× faster per simulation); ``"python"``: SciPy's
-        stepper driven from Python; ``"auto"`` (default): compiled where it applies (``method
-        "DOP853"``, no ``feedforward`` or ``feedback``, a C compiler present), else Python.
+        location as the Python loop, events equal to 1e-12; ``python -m bench.simulate``
+        measures both); ``"python"``: SciPy's stepper driven from Python; ``"auto"``
+        (default): compiled where it applies (``method "DOP853"``, no ``feedforward`` or
+        ``feedback``, a C compiler present), else Python.
 
     Returns
     -------
