@@ -15,7 +15,8 @@ read there (a short compiled run may finish within one time slice while a long P
 always waits, which inflates the wall-time ratios, the minima's most).
 
 Run alone: ``python -m bench.simulate [--repeats N] [--steps N] [--out FILE] [MODEL ...]``
-(default every registered model, ``results/bench_simulate.json``).  The machine is shared: read
+(default every registered model, ``results/bench_simulate.json``); ``make bench`` runs it too
+(``simulate`` in ``results/bench.json``; three models with ``--quick``).  The machine is shared: read
 the medians, not single runs.
 """
 
