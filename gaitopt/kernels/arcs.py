@@ -6,14 +6,18 @@ For each phase ``i`` of a model class the library holds CasADi-generated C for
 * ``excursion_i(x, u, p) -> (ġ, g̈)``, the signed rates of the transitions' guards (the
   short-excursion step bound);
 * per event set (``c``: with the unilateral constraints, ``g``: guards only, a guess's
-  simulation) ``step_i_c`` — the same DOP853 step as the verification's
-  (:func:`gaitopt.dop853.step_function`) — ``events_i_c``, the event functions, and
-  ``admissible_i_c``, each transition's admissibility (1 where it has no rule);
+  simulation) ``events_i_c``, the event functions, and ``admissible_i_c``, each transition's
+  admissibility (1 where it has no rule);
 * ``reset_i_k(x, u, p)``, transition ``k``'s reset, and ``start_i(x, u, p) -> (c, ċ)``, the
   unilateral constraints' values and rates (the checks where a phase begins);
 
 and the hand-written driver ``gaitopt_arc`` (:mod:`gaitopt.kernels.arc_driver`): the adaptive
 steps, error control, dense output, directional event detection and root location of one arc.
+The DOP853 step of each phase and event set is the verification's, compiled once in its own
+library (:mod:`gaitopt.kernels.verify`: ``dop853_i_c``, :func:`gaitopt.dop853.step_function`)
+and called from the driver through its address: the same code as the Python loop's steps, not
+compiled twice (a model defined outside gaitopt, whose libraries are not indexed, gets its own
+copy, ``step_i_c``).
 The library is compiled once per model class and cached like every kernel
 (:mod:`gaitopt.kernels.cache`: named by a hash of its source, listed in the index under the
 package's source key); it is loaded with ``ctypes``.  Where there is no C compiler,
@@ -40,7 +44,7 @@ from .verify import CHECKS_PER_STEP, phase_events
 __all__ = ["ArcLibrary", "arc_library"]
 
 
-def _functions(model_cls) -> list[ca.Function]:
+def _functions(model_cls, steps: bool) -> list[ca.Function]:
     from ..dop853 import step_function
     from ..hybrid import rate_along
 
@@ -68,9 +72,10 @@ def _functions(model_cls) -> list[ca.Function]:
         for constraints in (True, False):
             tag = "c" if constraints else "g"
             events = phase_events(phase, constraints)
-            step = step_function(flow, events, CHECKS_PER_STEP)
-            args = step.mx_in()  # named as the verification's (same graph, same code)
-            functions.append(ca.Function(f"step_{i}_{tag}", args, step.call(args)))
+            if steps:  # else the verification's compiled steps are used (_steps_library)
+                step = step_function(flow, events, CHECKS_PER_STEP)
+                args = step.mx_in()  # as the verification's (same graph, same code)
+                functions.append(ca.Function(f"step_{i}_{tag}", args, step.call(args)))
             values = [e(x, u, p)[0] for e in events]
             functions.append(ca.Function(f"events_{i}_{tag}", [x, u, p], [ca.vertcat(*values)]))
             rules = [
@@ -82,23 +87,44 @@ def _functions(model_cls) -> list[ca.Function]:
     return functions
 
 
-def _library_path(model_cls, verbose: bool) -> Path | None:
-    """The compiled library of a model class (compiled on first use), or None without a
-    compiler or where compiling fails."""
+def _steps_library(model_cls) -> Path | None:
+    """The verification's compiled DOP853 steps of a model class (:mod:`gaitopt.kernels.verify`:
+    ``dop853_<phase>_<c|g>``, compiled or loaded here), or None where they are not in the
+    index (a model defined outside gaitopt): the arc library then compiles its own copy."""
+    from .verify import verification_steps
+
+    name = f"gaitopt_{model_cls.__name__.lower()}_dop853"
+    key = source_key(name, model_cls)
+    if key is None or verification_steps(model_cls) is None:
+        return None
+    try:
+        entry = json.loads((cache_dir() / "index" / f"{key}.json").read_text())
+        library = cache_dir() / entry["library"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return library if library.exists() else None
+
+
+def _library_path(model_cls, verbose: bool) -> tuple[Path, Path | None] | None:
+    """The compiled arc library of a model class (compiled on first use) and the library of
+    the DOP853 steps it uses (None: its own), or None without a compiler or where compiling
+    fails."""
     cc = compiler()
     if cc is None:
         return None
+    steps = _steps_library(model_cls)
     name = f"gaitopt_{model_cls.__name__.lower()}_arcs"
     key = source_key(name, model_cls)
     if key is not None:
         try:
             entry = json.loads((cache_dir() / "index" / f"{key}.json").read_text())
             library = cache_dir() / entry["library"]
-            if library.exists():
-                return library
+            own = "step_0_c" in entry["functions"]  # the steps compiled in
+            if library.exists() and (own or steps is not None):
+                return library, None if own else steps
         except (OSError, ValueError, KeyError, TypeError):
             pass
-    functions = _functions(model_cls)
+    functions = _functions(model_cls, steps=steps is None)
     gen = ca.CodeGenerator(f"{name}.c", {"with_header": False})
     for f in functions:
         gen.add(f)
@@ -114,16 +140,18 @@ def _library_path(model_cls, verbose: bool) -> Path | None:
             return None
     if key is not None:
         _write_index(key, library, [f.name() for f in functions])
-    return library
+    return library, steps
 
 
 class ArcLibrary:
     """A model class's loaded arc library: :meth:`pointers` of one phase's functions for
     ``gaitopt_arc``."""
 
-    def __init__(self, path: Path, structure):
+    def __init__(self, path: Path, structure, steps: Path | None = None):
         self.path = path
         self._lib = ctypes.CDLL(str(path))
+        # the DOP853 steps: the verification's library's (same code), or compiled in here
+        self._steps = ctypes.CDLL(str(steps)) if steps is not None else self._lib
         self.arc = self._lib.gaitopt_arc
         self.arc.restype = ctypes.c_int
         vp, i = ctypes.c_void_p, ctypes.c_int
@@ -146,12 +174,14 @@ class ArcLibrary:
         for i in range(len(phases)):
             for constraints in (True, False):
                 tag = "c" if constraints else "g"
-                names = [f"step_{i}_{tag}", f"events_{i}_{tag}", f"admissible_{i}_{tag}",
-                         f"flow_{i}", f"excursion_{i}"]  # fmt: skip
+                step = f"dop853_{i}_{tag}" if steps is not None else f"step_{i}_{tag}"
+                names = [step, f"events_{i}_{tag}", f"admissible_{i}_{tag}", f"flow_{i}",
+                         f"excursion_{i}"]  # fmt: skip
                 table = (ctypes.c_void_p * 10)()
                 for j, name in enumerate(names):
+                    lib = self._steps if j == 0 else self._lib
                     for k, symbol in enumerate((name, f"{name}_work")):
-                        pointer = ctypes.cast(getattr(self._lib, symbol), ctypes.c_void_p)
+                        pointer = ctypes.cast(getattr(lib, symbol), ctypes.c_void_p)
                         table[2 * j + k] = pointer.value
                 self._pointers[(i, constraints)] = table
 
@@ -197,10 +227,10 @@ def arc_library(model_cls, verbose: bool = True) -> ArcLibrary | None:
     ``GAITOPT_COMPILE=0``), compiling fails, or the model's functions cannot be built on SX
     symbols: the simulation then runs its Python loop."""
     try:
-        path = _library_path(model_cls, verbose)
-        if path is None:
+        found = _library_path(model_cls, verbose)
+        if found is None:
             return None
-        return ArcLibrary(path, model_cls.structure())
+        return ArcLibrary(found[0], model_cls.structure(), found[1])
     except (RuntimeError, TypeError, NotImplementedError, OSError, AttributeError):
         return None
 
