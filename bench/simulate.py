@@ -16,8 +16,8 @@ always waits, which inflates the wall-time ratios, the minima's most).
 
 Run alone: ``python -m bench.simulate [--repeats N] [--steps N] [--out FILE] [MODEL ...]``
 (default every registered model, ``results/bench_simulate.json``); ``make bench`` runs it too
-(``simulate`` in ``results/bench.json``; three models with ``--quick``).  The machine is shared: read
-the medians, not single runs.
+(``simulate`` in ``results/bench.json``; three models with ``--quick``).  The machine is
+shared: read the medians, not single runs.
 """
 
 from __future__ import annotations
