@@ -43,7 +43,14 @@ def _agree(a, b) -> None:
     assert np.allclose(a.section_times, b.section_times, rtol=0, atol=TOL * 10)
 
 
-@pytest.mark.parametrize("name", model_names())
+# The Strandbeest's structure takes about 20 s to build in a fresh process (its linkage).
+_MODELS = [
+    pytest.param(name, marks=pytest.mark.slow) if name == "strandbeest" else name
+    for name in model_names()
+]
+
+
+@pytest.mark.parametrize("name", _MODELS)
 def test_compiled_arcs_take_the_python_loops_steps_and_events(name):
     model = gaitopt.model(name)
     python = simulate(model, steps=3, backend="python")
@@ -134,3 +141,27 @@ def test_bench_record_and_table(tmp_path):
         assert entry["max_event_time_difference_s"] <= TOL
         assert entry["python_s"] > 0 and entry["compiled_s"] > 0
     assert "speed-up per simulation" in bench.table(record)
+
+
+def test_the_shootings_guess_and_referee_run_compiled(monkeypatch):
+    # find_limit_cycle simulates twice with a constant input (its guess, then the referee from the
+    # fixed point): both through compiled arcs by default, none through the Python loop.
+    import gaitopt.simulation as simulation
+    from gaitopt.simulation import compiled
+
+    calls = {"compiled": 0, "python": 0}
+    arc, phase = compiled.integrate_arc, simulation.integrate_phase
+
+    def counted_arc(*args, **kwargs):
+        calls["compiled"] += 1
+        return arc(*args, **kwargs)
+
+    def counted_phase(*args, **kwargs):
+        calls["python"] += 1
+        return phase(*args, **kwargs)
+
+    monkeypatch.setattr(compiled, "integrate_arc", counted_arc)
+    monkeypatch.setattr(simulation, "integrate_phase", counted_phase)
+    cycle = gaitopt.find_limit_cycle(gaitopt.model("compass_gait"))
+    assert cycle.success and cycle.verified
+    assert calls["compiled"] >= 2 and calls["python"] == 0
