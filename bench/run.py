@@ -66,6 +66,7 @@ from . import branches as _bench_branches
 from . import curves as _bench_curves
 from . import first_call as _bench_first_call
 from . import optimize as _bench_optimize
+from . import simulate as _bench_simulate
 from . import speed as _bench_speed
 from .common import _machine
 from .control import _deadbeat_bench
@@ -155,6 +156,12 @@ def run(
             record["first_call"] = _bench_first_call.run(repeats=repeats)
         except Exception as err:  # report, never sink the benchmark
             record["first_call"] = {"skipped": f"{type(err).__name__}: {err}"}
+        log("[bench] the simulation's backends: compiled arcs vs the Python loop, per model")
+        try:
+            names = ["compass_gait", "slip", "kneed_walker"] if quick else None
+            record["simulate"] = _bench_simulate.run(names, repeats=max(repeats, 3))
+        except Exception as err:  # report, never sink the benchmark
+            record["simulate"] = {"skipped": f"{type(err).__name__}: {err}"}
     if control:
         log(f"[bench] slip deadbeat decision: Python, generated C, simulation ({decisions}×)")
         try:

@@ -9,6 +9,7 @@ from . import branches as _bench_branches
 from . import curves as _bench_curves
 from . import first_call as _bench_first_call
 from . import optimize as _bench_optimize
+from . import simulate as _bench_simulate
 from . import speed as _bench_speed
 from .common import _median, _ms, _sci
 from .control import _control_lines
@@ -188,6 +189,9 @@ def format_table(record: dict[str, Any]) -> str:
         lines += ["", f"speed: {record['speed']}"]
     if "first_call" in record:
         lines += ["", _bench_first_call.table(record["first_call"])]
+    if "simulate" in record:
+        simulate = record["simulate"]
+        lines += ["", str(simulate) if "skipped" in simulate else _bench_simulate.table(simulate)]
     lines += ["", _bench_speed.table(record)]
     lines.append(f"Total benchmark time: {record['elapsed_s']:.0f} s.")
     return "\n".join(lines)

@@ -6,6 +6,10 @@
   directory, loaded with ``ca.external`` (interpreted where there is no C compiler);
 * :mod:`~gaitopt.kernels.assemble` — the shooting residual and its Jacobians assembled in NumPy
   from per-segment blocks, for any mesh and period;
+* :mod:`~gaitopt.kernels.arcs` — the simulation's arc library: per phase the event functions,
+  admissibility, resets and constraint checks as C, and a hand-written C driver
+  (:mod:`~gaitopt.kernels.arc_driver`) that integrates one phase per call around the
+  verification's compiled DOP853 step (:mod:`~gaitopt.kernels.verify`);
 * :mod:`~gaitopt.kernels.nodes` — the collocation's node and interval functions with their
   Jacobians and Hessians, and the flow Jacobians of the Floquet check (the optimiser's kernels,
   assembled by :mod:`gaitopt.optimize.nodes`).

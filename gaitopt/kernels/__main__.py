@@ -1,6 +1,7 @@
 """``python -m gaitopt.kernels --warm [--jobs N] [MODEL ...]``: compile (or find in the cache) the
-shooting kernels, the verification's DOP853 steps, the batch simulation's functions and, for a
-model with inputs, the optimiser's node kernels and flow Jacobians
+shooting kernels, the verification's DOP853 steps, the compiled simulation's arc libraries, the
+batch simulation's functions and, for a model with inputs, the optimiser's node kernels and flow
+Jacobians
 (:func:`gaitopt.optimize.collocation.warm_kernels`) of the built-in models, so that no later call
 waits for the compiler.  ``--jobs`` compiles that many models at once (default: the number of
 CPUs); the cache is safe for concurrent compiles."""
@@ -32,6 +33,9 @@ def _warm(name: str) -> tuple[str, str, float, float]:
     start, cpu = time.perf_counter(), _cpu()
     kern = model_kernels(REGISTRY[name])
     verification_steps(REGISTRY[name])  # the verification's DOP853 steps
+    from .arcs import arc_library
+
+    arc_library(REGISTRY[name])  # the compiled simulation's arcs
     from ..simulation.batch_events import compiled_functions
 
     compiled_functions(REGISTRY[name])  # the batch simulation's guards, resets, locators

@@ -64,6 +64,7 @@ def simulate(
     constraints: bool = True,
     feedforward: Callable[[float, int], np.ndarray] | None = None,
     feedback: Feedback | None = None,
+    backend: str = "auto",
 ) -> Simulation:
     """Simulate a hybrid model for a number of steps.
 
@@ -119,6 +120,13 @@ def simulate(
         which sees the input at its instant and state; each phase is integrated by SciPy's
         stepper with the law called once per stage in Python.  Not with ``feedforward`` (a law
         that needs one includes it).  :attr:`Arc.u` records the input at the arc's start.
+    backend : str
+        ``"compiled"``: each phase (arc) is integrated in one call of compiled C
+        (:mod:`gaitopt.simulation.compiled`: the same DOP853 steps, event checks and root
+        location as the Python loop, events equal to 1e-12; ``python -m bench.simulate``
+        measures both); ``"python"``: SciPy's stepper driven from Python; ``"auto"``
+        (default): compiled where it applies (``method "DOP853"``, no ``feedforward`` or
+        ``feedback``, a C compiler present), else Python.
 
     Returns
     -------
@@ -144,6 +152,9 @@ def simulate(
     phase = check_count("phase", phase, 0, len(model.phases) - 1, f"{model.name} has "
                         f"{len(model.phases)} phase(s), numbered from 0")  # fmt: skip
     rtol, atol = check_positive("rtol", rtol, "1e-11"), check_positive("atol", atol, "1e-12")
+    library = _arc_library(model, backend, method, feedforward, feedback)
+    if library is not None:  # each arc one compiled call (imports scipy.integrate, as below)
+        from .compiled import arc_plan, integrate_arc, rests_on_guard, violated_at_start
     max_phase_time = check_positive("max_phase_time", max_phase_time, "30")
     x = _initial_state(model, x0, phase)
     u0 = model.nominal_input() if callable(inputs) else check_inputs(model, inputs)
@@ -179,18 +190,30 @@ def simulate(
         sec_t.append(t)
         sec_x.append(x.copy())
     cycle_end = (len(model.phases) - 1, 0)  # (phase, transition) that closes a cycle
+    known: dict[tuple[int, bytes, bytes], PhaseFunctions] = {}
     while len(sec_t) - 1 < steps or (phase != 0 and steps > 0):
         step_now = max(len(sec_t) - 1, 0)
         if feedback is not None:  # the input at the phase start (for the start's checks)
             u = np.asarray(feedback(t - (sec_t[-1] if sec_t else 0.0), x, phase, step_now),
                            dtype=float).ravel()  # fmt: skip
-        funcs = PhaseFunctions(model.phases[phase], u, p, constraints, type(model), phase)
+        if feedback is None and feedforward is None:  # a phase's functions at fixed u and p
+            key = (phase, np.asarray(u, dtype=float).tobytes(), np.asarray(p).tobytes())
+            funcs = known.get(key)
+            if funcs is None:
+                funcs = known[key] = PhaseFunctions(
+                    model.phases[phase], u, p, constraints, type(model), phase
+                )
+        else:
+            funcs = PhaseFunctions(model.phases[phase], u, p, constraints, type(model), phase)
         if feedback is not None:
             funcs._feedback = (feedback, sec_t[-1] if sec_t else 0.0, step_now, phase)
         elif feedforward is not None:  # the flow gets its own input buffer, rewritten per call
             funcs._flow = _Buffered(model.phases[phase].flow, np.array(u, dtype=float), p)
             funcs._drive = (feedforward, sec_t[-1] if sec_t else 0.0, max(len(sec_t) - 1, 0))
-        at_start = funcs.violated_at_start(x, t)
+        if library is not None:
+            at_start = violated_at_start(funcs, library, phase, x)
+        else:
+            at_start = funcs.violated_at_start(x, t)
         if at_start is not None:
             constraint = model.phases[phase].constraints[at_start[0] - len(funcs.phase.transitions)]
             sim.events.append(Event(t, phase, constraint.outcome, x.copy(), None))
@@ -200,7 +223,10 @@ def simulate(
                 f"{at_start[1]} in phase '{model.phases[phase].name}'"
             )
             break
-        resting = _rests_on_guard(funcs, x)
+        if library is not None:
+            resting = rests_on_guard(funcs, library, phase, x)
+        else:
+            resting = _rests_on_guard(funcs, x)
         if resting is not None and len(sec_t) - 1 < steps:
             sim.status = "standing"
             sim.accumulation_time = t
@@ -209,9 +235,14 @@ def simulate(
                 f"state starts on that guard with zero rate and presses into it (standing)"
             )
             break
-        arc, fired, x_minus, status = integrate_phase(
-            funcs, solver_cls, t, x, rtol, atol, max_phase_time, method
-        )
+        if library is not None:  # the whole arc in one compiled call
+            arc, fired, x_minus, status = integrate_arc(
+                funcs, library, phase, t, x, rtol, atol, max_phase_time
+            )
+        else:
+            arc, fired, x_minus, status = integrate_phase(
+                funcs, solver_cls, t, x, rtol, atol, max_phase_time, method
+            )
         sim.arcs.append(Arc(phase, t, arc.t_max, arc, u))
         t = arc.t_max
         if status is not None:
@@ -244,7 +275,10 @@ def simulate(
             u = funcs.feedback_input(t, x_minus)
         elif feedforward is not None:  # the reset sees the input at the event
             u = np.asarray(feedforward(t - funcs._drive[1], funcs._drive[2]), dtype=float)
-        x = np.asarray(tr.reset(x_minus, u, p), dtype=float).ravel()
+        if library is not None:
+            x = arc_plan(funcs, library, phase).reset(fired, x_minus)
+        else:
+            x = np.asarray(tr.reset(x_minus, u, p), dtype=float).ravel()
         sim.events.append(Event(t, phase, tr.name, x_minus, x.copy()))
         closes_cycle = (phase, fired) == cycle_end or tr.returns_to_section
         phase = tr.target
@@ -271,6 +305,34 @@ def simulate(
     sim.section_states = np.array(sec_x) if sec_x else np.zeros((0, len(model.state_names)))
     sim.step_parameters = step_parameters
     return sim
+
+
+_BACKENDS = ("auto", "compiled", "python")
+
+
+def _arc_library(model: HybridModel, backend: str, method: str, feedforward, feedback):
+    """The model class's compiled arc library where ``backend`` asks for it and it applies,
+    else None (the Python loop)."""
+    if backend not in _BACKENDS:
+        raise GaitoptInputError(f"`backend` must be one of {', '.join(_BACKENDS)}, got {backend!r}")
+    if backend == "python":
+        return None
+    if method != "DOP853" or feedforward is not None or feedback is not None:
+        if backend == "compiled":
+            raise GaitoptInputError(
+                f"`backend` 'compiled' needs method 'DOP853' and no feedforward or feedback "
+                f"(got method {method!r}); use backend='auto', which simulates those in Python"
+            )
+        return None
+    from ..kernels.arcs import arc_library
+
+    library = arc_library(type(model))
+    if library is None and backend == "compiled":
+        raise GaitoptInputError(
+            f"`backend` 'compiled': no compiled arc library for {model.name} (no C compiler: "
+            f"$GAITOPT_CC, default gcc, or GAITOPT_COMPILE=0); use backend='auto' or 'python'"
+        )
+    return library
 
 
 def _initial_state(model: HybridModel, x0, phase: int) -> np.ndarray:

@@ -1,0 +1,229 @@
+"""One phase of a simulation in one compiled call: :func:`integrate_arc`.
+
+The same integration as :func:`gaitopt.simulation.phase.integrate_phase` with SciPy's DOP853
+(each step one call of the compiled step), moved into C: the adaptive steps, error control,
+dense output, the strict directional event checks at each step's check points, the root on the
+dense output and the admissibility of a crossing all run inside ``gaitopt_arc``
+(:mod:`gaitopt.kernels.arc_driver`), one ``ctypes`` call per arc instead of some 300 µs of
+Python per step.  Python builds the arc's :class:`scipy.integrate.OdeSolution` from the steps'
+dense-output coefficients afterwards (SciPy's own ``Dop853DenseOutput``), so an arc is the
+same object either way.  Only for a constant input over the phase (no feedforward or feedback:
+those stay in the Python loop).  Imported on a simulation's first compiled arc (it imports
+``scipy.integrate``, 0.4 s, as the Python loop does on first use).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate import OdeSolution
+
+from ..kernels.arcs import ArcLibrary, address
+from .phase import _ARM, _CONSTRAINT_RATE, _CONSTRAINT_START, PhaseFunctions, _held
+
+__all__ = [
+    "ArcPlan", "DenseArc", "arc_plan", "integrate_arc", "rests_on_guard", "violated_at_start"
+]  # fmt: skip
+
+#: Steps recorded per call before the driver returns to have its buffers emptied.
+_CAPACITY = 512
+
+
+class ArcPlan:
+    """One phase's compiled calls at fixed input and parameters, with their buffers: built once
+    per :class:`PhaseFunctions` (which a simulation keeps per phase, input and parameters), so
+    that an arc costs one ``ctypes`` call and no allocation of its arguments."""
+
+    def __init__(self, funcs: PhaseFunctions, library: ArcLibrary, index: int):
+        self.library, self.index = library, index
+        self.n = n = funcs.phase.flow.size1_in(0)
+        self.m = m = funcs.events
+        n_tr = len(funcs.phase.transitions)
+        self.u = np.array(funcs.u, dtype=float).ravel()
+        self.p = np.array(funcs.p, dtype=float).ravel()
+        self.dims = np.array([n, m, n_tr], dtype=np.int32)
+        self.dirs = np.asarray(funcs._directions, dtype=float).copy()
+        ends = [int(c.at_end) for c in funcs.constraints]
+        self.at_end = np.array([0] * n_tr + ends, dtype=np.int32)
+        self.opts = np.zeros(4)
+        self.state = np.zeros(4 + 2 * n + 2 * m)
+        cap = self.capacity = _CAPACITY
+        self.stamps, self.ends = np.zeros(cap), np.zeros(cap)
+        self.yold, self.F = np.zeros(cap * n), np.zeros(cap * 7 * n)
+        self.count, self.event = np.zeros(1, dtype=np.int32), np.zeros(1, dtype=np.int32)
+        self.hit = np.zeros(1 + n)
+        table = library.pointers(index, funcs._compiled_key[2])
+        self.args = (
+            table, *map(address, (self.dims, self.u, self.p, self.dirs, self.at_end, self.opts,
+                                  self.state)),
+            cap, *map(address, (self.stamps, self.ends, self.yold, self.F, self.count,
+                                self.hit, self.event)),
+        )  # fmt: skip
+        self._table = table  # kept alive with its address
+        self._functions: dict[str, object] = {}
+
+    def function(self, name: str):
+        """The library's function ``name`` at this phase's input and parameters (built once)."""
+        f = self._functions.get(name)
+        if f is None:
+            f = self._functions[name] = self.library.function(name, self.u, self.p)
+        return f
+
+    def reset(self, transition: int, x: np.ndarray) -> np.ndarray:
+        """Transition ``transition``'s reset of the state ``x``, compiled."""
+        return self.function(f"reset_{self.index}_{transition}")(x)[0]
+
+
+def arc_plan(funcs: PhaseFunctions, library: ArcLibrary, index: int) -> ArcPlan:
+    """The phase's :class:`ArcPlan`, built on first use and kept with ``funcs``."""
+    plan = getattr(funcs, "_arc_plan", None)
+    if plan is None or plan.library is not library:
+        plan = funcs._arc_plan = ArcPlan(funcs, library, index)
+    return plan
+
+
+def integrate_arc(
+    funcs: PhaseFunctions,
+    library: ArcLibrary,
+    index: int,
+    t0: float,
+    x0: np.ndarray,
+    rtol: float,
+    atol: float,
+    max_time: float,
+):
+    """Integrate phase ``index`` from ``(t0, x0)`` until an admissible directional crossing.
+
+    Parameters
+    ----------
+    funcs : PhaseFunctions
+        The phase's functions at its input and parameters (their values and event layout).
+    library : ArcLibrary
+        The model class's compiled arc library.
+    index : int
+        The phase's index in the model.
+    t0 : float
+        Start time (s).
+    x0 : numpy.ndarray
+        Start state.
+    rtol, atol : float
+        Integrator tolerances.
+    max_time : float
+        The phase's timeout (s after ``t0``).
+
+    Returns
+    -------
+    tuple
+        ``(solution, event, x_minus, status)`` as :func:`~gaitopt.simulation.phase
+        .integrate_phase`: the arc's ``OdeSolution``, the index of the event that fired and the
+        state there (None, None with a status ``"timeout"`` or ``"failed"``).
+    """
+    plan = arc_plan(funcs, library, index)
+    n = plan.n
+    x0 = np.asarray(x0, dtype=float).ravel()
+    # SciPy's solvers raise rtol to 100 eps (with a warning: scipy.integrate._ivp.common
+    # .validate_tol); so does the driver, to take the same steps
+    rtol = max(float(rtol), 100 * np.finfo(float).eps)
+    plan.opts[:] = (rtol, atol, t0, t0 + max_time)
+    state = plan.state
+    state[:] = 0.0
+    state[0], state[1] = t0, -1.0  # h_abs < 0: the driver starts the arc
+    state[4 : 4 + n] = x0
+    stamps, ends, Y, F = [np.array([t0])], [], [], []
+    while True:
+        code = library.arc(*plan.args)
+        if code < 0:
+            raise RuntimeError(f"the compiled arc of phase {index} failed (code {code})")
+        k = int(plan.count[0])
+        stamps.append(plan.stamps[:k].copy())
+        ends.append(plan.ends[:k].copy())
+        Y.append(plan.yold[: k * n].reshape(k, n).copy())
+        F.append(plan.F[: k * 7 * n].reshape(k, 7, n).copy())
+        if code == 3:  # buffers full: go on from the driver's state
+            continue
+        steps = sum(len(e) for e in ends)
+        if code == 2 and not steps:  # the first step failed
+            return _held(t0, x0), None, None, "failed"
+        arc = DenseArc(*map(np.concatenate, (stamps, ends, Y, F)))
+        if code == 0:
+            return arc, int(plan.event[0]), plan.hit[1:].copy(), None
+        return arc, None, None, "timeout" if code == 1 else "failed"
+
+
+class DenseArc(OdeSolution):
+    """An arc's :class:`scipy.integrate.OdeSolution` from the compiled steps' dense-output
+    coefficients: its pieces (SciPy's ``Dop853DenseOutput``, one per step) are built when first
+    evaluated, not per step as the arc is integrated.
+
+    Parameters
+    ----------
+    ts : numpy.ndarray
+        The arc's time stamps (s): its start, then each step's end (the last: the crossing).
+    ends : numpy.ndarray
+        Each step's own end (s; the last step's may lie past the crossing).
+    y_old : numpy.ndarray
+        Each step's start state (rows).
+    F : numpy.ndarray
+        Each step's 7 dense-output coefficient vectors (steps × 7 × n, SciPy's ``F``).
+    """
+
+    def __init__(self, ts: np.ndarray, ends: np.ndarray, y_old: np.ndarray, F: np.ndarray):
+        # OdeSolution's attributes for increasing, strictly ordered time stamps (the driver's
+        # crossings lie strictly after a step's start: locate_crossing)
+        self.ts = self.ts_sorted = ts
+        self.n_segments = ends.size
+        self.t_min, self.t_max = ts[0], ts[-1]
+        self.ascending, self.side = True, "left"
+        self._steps = (ends, y_old, F)
+        self._interpolants = None
+
+    @property
+    def interpolants(self) -> list:
+        """The steps' ``Dop853DenseOutput`` pieces (built on first use)."""
+        if self._interpolants is None:
+            from scipy.integrate._ivp.rk import Dop853DenseOutput
+
+            ends, y_old, F = self._steps
+            starts = self.ts[:-1].tolist()
+            self._interpolants = [
+                Dop853DenseOutput(t_old, t_new, y, f)
+                for t_old, t_new, y, f in zip(starts, ends.tolist(), y_old, F, strict=True)
+            ]
+        return self._interpolants
+
+
+def rests_on_guard(funcs: PhaseFunctions, library: ArcLibrary, index: int, x0: np.ndarray):
+    """:func:`gaitopt.simulation.phase._rests_on_guard` with the guards' signed rates and
+    curvatures along the flow from the compiled library (``excursion_<phase>``): the transition
+    whose guard the state rests on, pressing into it, or None."""
+    rates = None
+    for k, tr in enumerate(funcs.phase.transitions):
+        if tr.terminal or abs(funcs.signed_guard(k, x0)) > _ARM:
+            continue
+        if rates is None:
+            rates = arc_plan(funcs, library, index).function(f"excursion_{index}")(x0)
+        g1, g2 = float(rates[0][k]), float(rates[1][k])
+        if abs(g1) <= _ARM and g2 > 0:
+            return tr.name
+    return None
+
+
+def violated_at_start(funcs: PhaseFunctions, library: ArcLibrary, index: int, x: np.ndarray):
+    """:meth:`PhaseFunctions.violated_at_start` with the constraints' values and rates from the
+    compiled library (``start_<phase>``): ``(event, reason)`` of a constraint that fails where
+    the phase begins, or None."""
+    if not funcs.constraints:
+        return None
+    values, rates = arc_plan(funcs, library, index).function(f"start_{index}")(x)
+    n_tr = len(funcs.phase.transitions)
+    for j, c in enumerate(funcs.constraints):
+        unit = f" {c.unit}" if c.unit else ""
+        if c.at_start:
+            rate = float(rates[j])
+            if not rate > _CONSTRAINT_RATE:
+                return (
+                    n_tr + j,
+                    f"'{c.name}' starts at 0 and does not rise (rate {rate:.3g}{unit}/s)",
+                )
+        elif float(values[j]) < -_CONSTRAINT_START:
+            return n_tr + j, f"'{c.name}' fails at the start ({float(values[j]):.3g}{unit})"
+    return None
