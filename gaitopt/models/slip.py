@@ -52,9 +52,10 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ParameterError
-from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
+from ..hybrid import HybridModel, Phase, Section, Symbols
 from ..parameters import gravity_parameter, parameter
-from .blocks import apex, ballistic_flow, fall, hip_about_foot, leg_touchdown
+from .blocks import apex, ballistic_flow, fall, leg_touchdown
+from .polar import UNITS, spring_stance
 
 __all__ = ["Slip", "SlipSwingLeg", "SWING_LAW_DEGREE"]
 
@@ -122,87 +123,8 @@ def _build(sym: Symbols, angle_law) -> tuple[tuple[Phase, ...], Section]:
         point_names=("hip", "foot", "origin"),
     )
 
-    # -- stance: polar coordinates about the foot ------------------------------------------------
-    xs, (r, th, r_dot, th_dot) = sym.states("r", "theta", "r_dot", "theta_dot")
-    stance_flow = sym.function(
-        "flow",
-        xs,
-        ca.vertcat(
-            r_dot,
-            th_dot,
-            r * th_dot**2 - g * ca.cos(th) + k / m * (l0 - r),
-            (g * ca.sin(th) - 2 * r_dot * th_dot) / r,
-        ),
-    )
-    hip_x, hip_above_foot, hip_xd, hip_zd = hip_about_foot(r, th, r_dot, th_dot)
-    hip_z = h + hip_above_foot
-    to_flight = ca.vertcat(hip_x, hip_z, hip_xd, hip_zd)
-    liftoff = Transition(
-        name="liftoff",
-        guard=sym.function("guard", xs, r - l0),  # r = l0, extending
-        direction=+1,
-        reset=sym.function("reset", xs, to_flight),
-        target=2,
-        admissible=sym.function("admissible", xs, hip_xd),  # moving forwards
-        impact=False,
-        doc="the spring regains its rest length, r = l0, extending, moving forwards; Cartesian "
-        "flight state with x from the foot",
-    )
-    backwards = fall(
-        sym,
-        xs,
-        "falls back (lifts off moving backwards)",
-        r - l0,
-        "liftoff with the hip moving backwards: too little forward energy",
-        direction=+1,
-        admissible=-hip_xd,
-    )
-    stops = fall(
-        sym,
-        xs,
-        "falls back (stance leg stops rotating)",
-        th_dot,
-        "θ̇ falls through 0 in stance: too little forward energy to vault over the foot",
-    )
-    collapses = fall(
-        sym,
-        xs,
-        "falls (hip reaches the ground in stance)",
-        hip_above_foot,
-        "the hip reaches the foot's level",
-    )
-    stance_energy = sym.conserved(
-        "energy",
-        xs,
-        0.5 * m * (r_dot**2 + r**2 * th_dot**2) + m * g * hip_z + 0.5 * k * (l0 - r) ** 2,
-    )
-    stance_points = ca.Function(
-        "points",
-        [xs, sym.p],
-        [ca.horzcat(ca.vertcat(hip_x, hip_above_foot), ca.DM.zeros(2, 1))],
-    )
-    # The massless spring leg can only push: its force k (l0 − r) ≥ 0 (zero at touchdown and
-    # at liftoff, where r = l0: it must compress at once after touchdown).
-    compressed = sym.constraint(
-        "leg force compressive",
-        xs,
-        k * (l0 - r),
-        "leg pulls",
-        at_start=True,
-        at_end=True,
-        unit="N",
-        source="a massless spring leg on the ground can only push (Blickhan 1989)",
-    )
-    stance = Phase(
-        "stance",
-        ("r", "theta", "r_dot", "theta_dot"),
-        stance_flow,
-        (liftoff, backwards, stops, collapses),
-        {"energy": stance_energy},
-        points=stance_points,
-        point_names=("hip", "foot"),
-        constraints=(compressed,),
-    )
+    # -- stance: polar coordinates about the foot (Tedrake's stance equations) -----------------
+    stance = spring_stance(sym, stiffness=k, rest_length=l0, target=2, ground=h)
 
     # -- flight: ascent to the apex ------------------------------------------------------------
     top = apex(
@@ -263,16 +185,7 @@ class Slip(HybridModel):
     declared_coordinates = ("z",)
     declared_section_doc = "apex: z_dot = 0, x = 0, x_dot = sqrt(2 (energy/mass − gravity·z))"
     drawing = (("hip", "foot"),)  # leg and body; other points are helpers
-    state_units = {
-        "x": "m",
-        "z": "m",
-        "x_dot": "m/s",
-        "z_dot": "m/s",
-        "r": "m",
-        "theta": "rad",
-        "r_dot": "m/s",
-        "theta_dot": "rad/s",
-    }  # for axis labels
+    state_units = UNITS  # for axis labels
     title = "Spring-loaded inverted pendulum (SLIP)"
     reference = "Blickhan 1989; Geyer et al. 2005; Tedrake, Underactuated Robotics"
     inputs = ("touchdown_angle",)
