@@ -74,6 +74,7 @@ from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import ballistic_flow, fall, leg_touchdown
 from .polar import FLIGHT, UNITS, spring_stance
+from .quantities import energy_parameter, length_parameter, mass_parameter, stiffness_parameter
 
 __all__ = ["BipedRunner", "classify"]
 
@@ -180,25 +181,13 @@ def _step(sym: Symbols, leg: str, first: int) -> tuple[Phase, Phase, Phase]:
 def _leg_parameter(kind: str, leg: str):
     L = leg.upper()
     if kind == "stiffness":
-        return parameter(
+        return stiffness_parameter(
             8397.36,
-            unit="N/m",
-            doc=f"leg {L} stiffness k_{leg} (k̃ = k l/(m g) = 10.7 at the defaults)",
-            source=_TEDRAKE + ": k̃ = 10.7",
-            low=0.0,
-            high=1e7,
-            low_open=True,
+            f"leg {L} stiffness k_{leg} (k̃ = k l/(m g) = 10.7 at the defaults)",
+            _TEDRAKE + ": k̃ = 10.7",
         )
     if kind == "rest_length":
-        return parameter(
-            1.0,
-            unit="m",
-            doc=f"leg {L} rest length l_{leg}",
-            source=_TEDRAKE,
-            low=0.0,
-            high=10.0,
-            low_open=True,
-        )
+        return length_parameter(1.0, f"leg {L} rest length l_{leg}", _TEDRAKE)
     return parameter(
         math.pi / 6,
         unit="rad",
@@ -241,9 +230,7 @@ class BipedRunner(HybridModel):
     #: A flight from an apex lasts at most sqrt(2 E/(m g²)) ≈ 0.6 s at the defaults.
     max_phase_time: ClassVar[float] = 5.0
 
-    mass: float = parameter(
-        80.0, unit="kg", doc="body mass m", source=_TEDRAKE, low=0.0, high=1e4, low_open=True
-    )
+    mass: float = mass_parameter(80.0, "body mass m", _TEDRAKE)
     stiffness_a: float = _leg_parameter("stiffness", "a")
     stiffness_b: float = _leg_parameter("stiffness", "b")
     rest_length_a: float = _leg_parameter("rest_length", "a")
@@ -251,14 +238,10 @@ class BipedRunner(HybridModel):
     touchdown_angle_a: float = _leg_parameter("angle", "a")
     touchdown_angle_b: float = _leg_parameter("angle", "b")
     gravity: float = gravity_parameter()
-    energy: float = parameter(
+    energy: float = energy_parameter(
         1263.528,
-        unit="J",
-        doc="total energy E = ½ m v² + m g z (Ẽ = E/(m g l) = 1.61 at the defaults)",
-        source=_TEDRAKE + ": Ẽ = 1.61",
-        low=0.0,
-        high=1e8,
-        low_open=True,
+        "total energy E = ½ m v² + m g z (Ẽ = E/(m g l) = 1.61 at the defaults)",
+        _TEDRAKE + ": Ẽ = 1.61",
     )
 
     @classmethod

@@ -35,6 +35,7 @@ from ..mechanics import (
 )
 from ..parameters import gravity_parameter, parameter
 from .blocks import fall
+from .quantities import length_parameter, mass_parameter
 
 __all__ = ["CompassGait"]
 
@@ -68,30 +69,10 @@ class CompassGait(HybridModel):
     input_units = ("N*m",)
     mesh = (4, 4)  # 16 RK8 steps per step: discretisation error ~1e-11
 
-    mass_hip: float = parameter(
-        10.0, unit="kg", doc="hip point mass m_h", source=_DRAKE, low=0.0, high=1e4, low_open=True
-    )
-    mass_leg: float = parameter(
-        5.0, unit="kg", doc="leg point mass m", source=_DRAKE, low=0.0, high=1e4, low_open=True
-    )
-    a: float = parameter(
-        0.5,
-        unit="m",
-        doc="foot to leg mass distance",
-        source=_DRAKE,
-        low=0.0,
-        high=10.0,
-        low_open=True,
-    )
-    b: float = parameter(
-        0.5,
-        unit="m",
-        doc="hip to leg mass distance",
-        source=_DRAKE,
-        low=0.0,
-        high=10.0,
-        low_open=True,
-    )
+    mass_hip: float = mass_parameter(10.0, "hip point mass m_h", _DRAKE)
+    mass_leg: float = mass_parameter(5.0, "leg point mass m", _DRAKE)
+    a: float = length_parameter(0.5, "foot to leg mass distance", _DRAKE)
+    b: float = length_parameter(0.5, "hip to leg mass distance", _DRAKE)
     gravity: float = gravity_parameter()
     slope: float = parameter(
         0.0525,

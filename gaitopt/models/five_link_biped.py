@@ -117,6 +117,7 @@ from ..mechanics import (
 )
 from ..parameters import gravity_parameter, parameter
 from .blocks import fall
+from .quantities import length_parameter, mass_parameter
 
 __all__ = ["FiveLinkBiped"]
 
@@ -144,7 +145,7 @@ INPUT_MATRIX = (
 
 def _mass(value: float, doc: str) -> Any:
     """A link mass (kg, in (0, 1e4]) from OptimTraj."""
-    return parameter(value, unit="kg", doc=doc, source=_OPTIMTRAJ, low=0.0, high=1e4, low_open=True)
+    return mass_parameter(value, doc, _OPTIMTRAJ)
 
 
 def _inertia(value: float, doc: str) -> Any:
@@ -154,7 +155,7 @@ def _inertia(value: float, doc: str) -> Any:
 
 def _length(value: float, doc: str) -> Any:
     """A link length (m, in (0, 10]) from OptimTraj."""
-    return parameter(value, unit="m", doc=doc, source=_OPTIMTRAJ, low=0.0, high=10.0, low_open=True)
+    return length_parameter(value, doc, _OPTIMTRAJ)
 
 
 def _com(value: float, doc: str) -> Any:

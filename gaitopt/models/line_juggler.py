@@ -48,6 +48,7 @@ import casadi as ca
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import bar_and_ball_points, fall
+from .quantities import restitution_parameter
 
 __all__ = ["LineJuggler"]
 
@@ -81,15 +82,10 @@ class LineJuggler(HybridModel):
     #: No ground under the scene (see :mod:`gaitopt.animation`).
     on_ground: ClassVar[bool] = False
 
-    restitution: float = parameter(
+    restitution: float = restitution_parameter(
         0.8,
-        unit="1",
-        doc="coefficient of restitution e of the ball on the paddle",
-        source="chosen for the textbook juggling exercise (Underactuated Robotics, ch. 4)",
-        low=0.0,
-        high=1.0,
-        low_open=True,
-        high_open=True,
+        "coefficient of restitution e of the ball on the paddle",
+        "chosen for the textbook juggling exercise (Underactuated Robotics, ch. 4)",
     )
     kappa1: float = parameter(
         0.04,

@@ -72,8 +72,9 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..hybrid import Constraint, HybridModel, Phase, Section, Symbols, Transition
-from ..parameters import gravity_parameter, parameter
+from ..parameters import gravity_parameter
 from .polar import STANCE, UNITS, flight_to_foothold, foot_stance, leg_power, liftoff
+from .quantities import length_parameter, mass_parameter
 
 __all__ = ["MinimalBipedWalk", "MinimalBipedRun"]
 
@@ -149,20 +150,12 @@ class _MinimalBiped(HybridModel):
 
 def _params():
     return {
-        "mass": parameter(
-            1.0, unit="kg", doc="body mass M", source=_SR, low=0.0, high=1e4, low_open=True
-        ),  # fmt: skip
-        "leg_length": parameter(
-            1.0, unit="m", doc="longest leg l_max", source=_SR, low=0.0, high=10.0, low_open=True
-        ),  # fmt: skip
-        "step_length": parameter(
+        "mass": mass_parameter(1.0, "body mass M", _SR),  # fmt: skip
+        "leg_length": length_parameter(1.0, "longest leg l_max", _SR),  # fmt: skip
+        "step_length": length_parameter(
             0.6,
-            unit="m",
-            doc="step length d, foot to foot (free it to optimise it: free=('step_length',))",
-            source="a human-like 0.6 l_max (Srinivasan & Ruina 2006 map the optimum over d)",
-            low=0.0,
-            high=10.0,
-            low_open=True,
+            "step length d, foot to foot (free it to optimise it: free=('step_length',))",
+            "a human-like 0.6 l_max (Srinivasan & Ruina 2006 map the optimum over d)",
         ),
     }
 

@@ -80,6 +80,7 @@ import numpy as np
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import fall
+from .quantities import length_parameter, restitution_parameter
 
 __all__ = ["PlanarJuggler"]
 
@@ -123,15 +124,8 @@ class PlanarJuggler(HybridModel):
     #: No ground under the scene (see :mod:`gaitopt.animation`).
     on_ground: ClassVar[bool] = False
 
-    restitution: float = parameter(
-        0.8,
-        unit="1",
-        doc="coefficient of restitution e of the ball on the paddle",
-        source="as the line juggler",
-        low=0.0,
-        high=1.0,
-        low_open=True,
-        high_open=True,
+    restitution: float = restitution_parameter(
+        0.8, "coefficient of restitution e of the ball on the paddle", "as the line juggler"
     )
     kappa1: float = parameter(
         0.04,
@@ -166,14 +160,11 @@ class PlanarJuggler(HybridModel):
         high=100.0,
         low_open=True,
     )
-    desired_position: float = parameter(
+    desired_position: float = length_parameter(
         0.5,
-        unit="m",
-        doc="desired impact point x̄ on the paddle (distance from the pivot)",
-        source="a bar of about a metre (Buehler et al. 1990's one-link juggler)",
-        low=0.0,
+        "desired impact point x̄ on the paddle (distance from the pivot)",
+        "a bar of about a metre (Buehler et al. 1990's one-link juggler)",
         high=100.0,
-        low_open=True,
     )
     gravity: float = gravity_parameter()
 

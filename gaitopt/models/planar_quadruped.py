@@ -66,6 +66,7 @@ from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import apex, ballistic_flow, fall
+from .quantities import energy_parameter, length_parameter, mass_parameter, stiffness_parameter
 
 __all__ = ["PlanarQuadruped", "PlanarQuadrupedPronk"]
 
@@ -267,9 +268,7 @@ class _QuadrupedBase(HybridModel):
     mesh = (6, 4)
     max_phase_time: ClassVar[float] = 5.0
 
-    mass: float = parameter(
-        20.865, unit="kg", doc="body mass m", source=_PAPER, low=0.0, high=1e4, low_open=True
-    )
+    mass: float = mass_parameter(20.865, "body mass m", _PAPER)
     inertia: float = parameter(
         1.3,
         unit="kg*m^2",
@@ -279,27 +278,9 @@ class _QuadrupedBase(HybridModel):
         high=1e4,
         low_open=True,
     )
-    half_length: float = parameter(
-        0.276,
-        unit="m",
-        doc="hip distance L from the COM (hips at ±L)",
-        source=_PAPER,
-        low=0.0,
-        high=10.0,
-        low_open=True,
-    )
-    rest_length: float = parameter(
-        0.323, unit="m", doc="leg rest length l0", source=_PAPER, low=0.0, high=10.0, low_open=True
-    )
-    stiffness: float = parameter(
-        3520.0,
-        unit="N/m",
-        doc="leg stiffness k (each sagittal leg)",
-        source=_PAPER,
-        low=0.0,
-        high=1e7,
-        low_open=True,
-    )
+    half_length: float = length_parameter(0.276, "hip distance L from the COM (hips at ±L)", _PAPER)
+    rest_length: float = length_parameter(0.323, "leg rest length l0", _PAPER)
+    stiffness: float = stiffness_parameter(3520.0, "leg stiffness k (each sagittal leg)", _PAPER)
     gravity: float = gravity_parameter()
 
     def _touchdown_heights(self) -> list[float]:
@@ -381,15 +362,13 @@ class PlanarQuadruped(_QuadrupedBase):
         low_open=True,
         high_open=True,
     )
-    energy: float = parameter(
+    energy: float = energy_parameter(
         90.0,
-        unit="J",
-        doc="total energy E (kinetic + m g z + spring)",
-        source="chosen: E/(m g) = 0.44 m, above the touchdown height l0·cos θ ≈ 0.31 m; "
-        "a passive gait exists there (tests/test_planar_quadruped.py)",
-        low=0.0,
-        high=1e8,
-        low_open=True,
+        "total energy E (kinetic + m g z + spring)",
+        (
+            "chosen: E/(m g) = 0.44 m, above the touchdown height l0·cos θ ≈ 0.31 m; "
+            "a passive gait exists there (tests/test_planar_quadruped.py)"
+        ),
     )
 
     def _touchdown_heights(self):
@@ -553,15 +532,13 @@ class PlanarQuadrupedPronk(_QuadrupedBase):
         high=math.pi / 2,
         high_open=True,
     )
-    energy: float = parameter(
+    energy: float = energy_parameter(
         90.0,
-        unit="J",
-        doc="total energy E (kinetic + m g z + spring)",
-        source="chosen: E/(m g) = 0.44 m, above the touchdown height l0·cos θ ≈ 0.31 m; "
-        "a passive gait exists there (tests/test_planar_quadruped.py)",
-        low=0.0,
-        high=1e8,
-        low_open=True,
+        "total energy E (kinetic + m g z + spring)",
+        (
+            "chosen: E/(m g) = 0.44 m, above the touchdown height l0·cos θ ≈ 0.31 m; "
+            "a passive gait exists there (tests/test_planar_quadruped.py)"
+        ),
     )
 
     def _touchdown_heights(self):

@@ -67,6 +67,7 @@ from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import apex, ballistic_flow, fall, hip_about_foot, leg_touchdown
+from .quantities import length_parameter, mass_parameter, stiffness_parameter
 
 __all__ = ["RaibertHopper", "FLIGHT_STATES", "STANCE_STATES"]
 
@@ -128,9 +129,7 @@ class RaibertHopper(HybridModel):
     mesh = (4, 4)
     max_phase_time: ClassVar[float] = 5.0
 
-    mass: float = parameter(
-        10.0, unit="kg", doc="body mass M", source=_SIZE, low=0.0, high=1e4, low_open=True
-    )
+    mass: float = mass_parameter(10.0, "body mass M", _SIZE)
     inertia: float = parameter(
         0.5,
         unit="kg m^2",
@@ -140,19 +139,11 @@ class RaibertHopper(HybridModel):
         high=1e4,
         low_open=True,
     )
-    rest_length: float = parameter(
-        0.5, unit="m", doc="leg rest length l0 in flight", source=_SIZE, low=0.0, high=10.0,
-        low_open=True,
-    )  # fmt: skip
-    stiffness: float = parameter(
+    rest_length: float = length_parameter(0.5, "leg rest length l0 in flight", _SIZE)
+    stiffness: float = stiffness_parameter(
         4000.0,
-        unit="N/m",
-        doc="leg spring stiffness k (k l0/(M g) = 20.4; expected stance time π sqrt(M/k) = "
-        "0.157 s)",
-        source=_SIZE,
-        low=0.0,
-        high=1e7,
-        low_open=True,
+        ("leg spring stiffness k (k l0/(M g) = 20.4; expected stance time π sqrt(M/k) = 0.157 s)"),
+        _SIZE,
     )
     damping: float = parameter(
         20.0,

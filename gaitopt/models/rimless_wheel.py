@@ -38,6 +38,7 @@ import numpy as np
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..mechanics import bodies_function
 from ..parameters import gravity_parameter, parameter
+from .quantities import length_parameter
 
 __all__ = ["RimlessWheel"]
 
@@ -67,14 +68,8 @@ class RimlessWheel(HybridModel):
         high=64,
         integer=True,
     )
-    length: float = parameter(
-        1.0,
-        unit="m",
-        doc="spoke length l",
-        source="Drake RimlessWheel default",
-        low=0.0,
-        high=100.0,
-        low_open=True,
+    length: float = length_parameter(
+        1.0, "spoke length l", "Drake RimlessWheel default", high=100.0
     )
     gravity: float = gravity_parameter()
     slope: float = parameter(

@@ -56,6 +56,7 @@ from ..hybrid import HybridModel, Phase, Section, Symbols
 from ..parameters import gravity_parameter, parameter
 from .blocks import apex, ballistic_flow, fall, leg_touchdown
 from .polar import UNITS, spring_stance
+from .quantities import energy_parameter, length_parameter, mass_parameter, stiffness_parameter
 
 __all__ = ["Slip", "SlipSwingLeg", "SWING_LAW_DEGREE"]
 
@@ -197,20 +198,10 @@ class Slip(HybridModel):
     #: (step-to-step controllers keep to it).
     input_bounds: ClassVar[dict[str, tuple[float, float]]] = {"touchdown_angle": (0.0, math.pi / 2)}
 
-    mass: float = parameter(
-        _M, unit="kg", doc="body mass m", source=_TEDRAKE, low=0.0, high=1e4, low_open=True
-    )
-    rest_length: float = parameter(
-        _L0, unit="m", doc="leg rest length l0", source=_TEDRAKE, low=0.0, high=10.0, low_open=True
-    )
-    stiffness: float = parameter(
-        8397.36,
-        unit="N/m",
-        doc="leg stiffness k (k̃ = k l0/(m g) = 10.7 at the defaults)",
-        source=_TEDRAKE + ": k̃ = 10.7",
-        low=0.0,
-        high=1e7,
-        low_open=True,
+    mass: float = mass_parameter(_M, "body mass m", _TEDRAKE)
+    rest_length: float = length_parameter(_L0, "leg rest length l0", _TEDRAKE)
+    stiffness: float = stiffness_parameter(
+        8397.36, "leg stiffness k (k̃ = k l0/(m g) = 10.7 at the defaults)", _TEDRAKE + ": k̃ = 10.7"
     )
     touchdown_angle: float = parameter(
         math.pi / 6,
@@ -222,14 +213,10 @@ class Slip(HybridModel):
         high_open=True,
     )
     gravity: float = gravity_parameter()
-    energy: float = parameter(
+    energy: float = energy_parameter(
         1263.528,
-        unit="J",
-        doc="total energy E = ½ m v² + m g z (Ẽ = E/(m g l0) = 1.61 at the defaults)",
-        source=_TEDRAKE + ": Ẽ = 1.61",
-        low=0.0,
-        high=1e8,
-        low_open=True,
+        "total energy E = ½ m v² + m g z (Ẽ = E/(m g l0) = 1.61 at the defaults)",
+        _TEDRAKE + ": Ẽ = 1.61",
     )
     ground_height: float = parameter(
         0.0,

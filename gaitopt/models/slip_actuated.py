@@ -53,8 +53,9 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..hybrid import Constraint, HybridModel, Phase, Section, Symbols
-from ..parameters import gravity_parameter, parameter
+from ..parameters import gravity_parameter
 from .polar import STANCE, UNITS, flight_to_foothold, foot_stance, leg_power, liftoff
+from .quantities import energy_parameter, length_parameter, mass_parameter, stiffness_parameter
 
 __all__ = ["SlipActuated"]
 
@@ -93,38 +94,21 @@ class SlipActuated(HybridModel):
     drawing = (("foot", "hip"),)
     max_phase_time: ClassVar[float] = 5.0
 
-    mass: float = parameter(
-        80.0, unit="kg", doc="body mass m", source=_TEDRAKE, low=0.0, high=1e4, low_open=True
+    mass: float = mass_parameter(80.0, "body mass m", _TEDRAKE)
+    rest_length: float = length_parameter(1.0, "leg rest length l0", _TEDRAKE)
+    stiffness: float = stiffness_parameter(
+        8397.36, "leg stiffness k (k̃ = k l0/(m g) = 10.7 at the defaults)", _TEDRAKE + ": k̃ = 10.7"
     )
-    rest_length: float = parameter(
-        1.0, unit="m", doc="leg rest length l0", source=_TEDRAKE, low=0.0, high=10.0, low_open=True
-    )
-    stiffness: float = parameter(
-        8397.36,
-        unit="N/m",
-        doc="leg stiffness k (k̃ = k l0/(m g) = 10.7 at the defaults)",
-        source=_TEDRAKE + ": k̃ = 10.7",
-        low=0.0,
-        high=1e7,
-        low_open=True,
-    )
-    energy: float = parameter(
+    energy: float = energy_parameter(
         1263.528,
-        unit="J",
-        doc="total energy E at touchdown (Ẽ = E/(m g l0) = 1.61 at the defaults)",
-        source=_TEDRAKE + ": Ẽ = 1.61",
-        low=0.0,
-        high=1e8,
-        low_open=True,
+        "total energy E at touchdown (Ẽ = E/(m g l0) = 1.61 at the defaults)",
+        _TEDRAKE + ": Ẽ = 1.61",
     )
-    step_length: float = parameter(
+    step_length: float = length_parameter(
         SLIP_STRIDE,
-        unit="m",
-        doc="stride d, foot to foot (free it to optimise it: free=('step_length',))",
-        source="the passive SLIP gait's stride at the slip model's defaults (θ_td = 30°)",
-        low=0.0,
+        "stride d, foot to foot (free it to optimise it: free=('step_length',))",
+        "the passive SLIP gait's stride at the slip model's defaults (θ_td = 30°)",
         high=20.0,
-        low_open=True,
     )
     gravity: float = gravity_parameter()
 

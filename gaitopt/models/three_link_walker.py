@@ -104,6 +104,7 @@ from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..mechanics import bodies_function, contact_force, impact_velocity, solve_small
 from ..parameters import parameter
 from .blocks import fall
+from .quantities import length_parameter, mass_parameter
 
 __all__ = ["ThreeLinkWalker"]
 
@@ -125,12 +126,12 @@ OUTPUT_MATRIX = ((0.0, 0.0, 1.0), (1.0, 1.0, 0.0))
 
 def _mass(value: float, doc: str) -> Any:
     """A point mass (kg, in (0, 1e4]) from Grizzle et al. 2001."""
-    return parameter(value, unit="kg", doc=doc, source=_GRIZZLE, low=0.0, high=1e4, low_open=True)
+    return mass_parameter(value, doc, _GRIZZLE)
 
 
 def _length(value: float, doc: str) -> Any:
     """A length (m, in (0, 10]) from Grizzle et al. 2001."""
-    return parameter(value, unit="m", doc=doc, source=_GRIZZLE, low=0.0, high=10.0, low_open=True)
+    return length_parameter(value, doc, _GRIZZLE)
 
 
 def _unit(angle: ca.SX) -> ca.SX:

@@ -79,6 +79,7 @@ from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import apex, ballistic_flow, fall
+from .quantities import length_parameter, mass_parameter, stiffness_parameter
 
 __all__ = ["VerticalHopper"]
 
@@ -111,20 +112,10 @@ class VerticalHopper(HybridModel):
     mesh = (4, 4)
     max_phase_time: ClassVar[float] = 10.0
 
-    mass: float = parameter(
-        10.0, unit="kg", doc="body mass m", source=_CHOSEN, low=0.0, high=1e4, low_open=True
-    )
-    rest_length: float = parameter(
-        0.5, unit="m", doc="leg rest length l0", source=_CHOSEN, low=0.0, high=10.0, low_open=True
-    )
-    stiffness: float = parameter(
-        4000.0,
-        unit="N/m",
-        doc="leg spring stiffness k",
-        source=_CHOSEN + " (k = m·20²)",
-        low=0.0,
-        high=1e8,
-        low_open=True,
+    mass: float = mass_parameter(10.0, "body mass m", _CHOSEN)
+    rest_length: float = length_parameter(0.5, "leg rest length l0", _CHOSEN)
+    stiffness: float = stiffness_parameter(
+        4000.0, "leg spring stiffness k", _CHOSEN + " (k = m·20²)", high=1e8
     )
     damping: float = parameter(
         0.0,
@@ -143,14 +134,11 @@ class VerticalHopper(HybridModel):
         high=1.0,
         high_open=True,
     )
-    desired_height: float = parameter(
+    desired_height: float = length_parameter(
         0.7,
-        unit="m",
-        doc="desired apex height h_d of the body (E_d = m g h_d)",
-        source="chosen: 0.2 m of flight above the 0.5 m leg",
-        low=0.0,
+        "desired apex height h_d of the body (E_d = m g h_d)",
+        "chosen: 0.2 m of flight above the 0.5 m leg",
         high=100.0,
-        low_open=True,
     )
     gain: float = parameter(
         0.5,
