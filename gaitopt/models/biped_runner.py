@@ -73,7 +73,7 @@ from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import ballistic_flow, fall, leg_touchdown
-from .polar import FLIGHT, UNITS, spring_stance
+from .polar import FLIGHT, UNITS, leg_in_flight, spring_stance
 from .quantities import energy_parameter, length_parameter, mass_parameter, stiffness_parameter
 
 __all__ = ["BipedRunner", "classify"]
@@ -96,19 +96,6 @@ def _step(sym: Symbols, leg: str, first: int) -> tuple[Phase, Phase, Phase]:
     xf, (x, z, x_dot, z_dot) = sym.states(*FLIGHT)
     ballistic = ballistic_flow(sym, xf, g, vertical=1)  # ẍ = 0, z̈ = −g
     flight_energy = sym.conserved("energy", xf, 0.5 * m * (x_dot**2 + z_dot**2) + m * g * z)
-
-    def flight_points():
-        return ca.Function(
-            "points",
-            [xf, sym.p],
-            [
-                ca.horzcat(
-                    ca.vertcat(x, z),
-                    ca.vertcat(x + l0 * ca.sin(drawn), z - l0 * ca.cos(drawn)),
-                    ca.vertcat(x, 0),
-                )
-            ],
-        )
 
     # -- descent: touchdown at z − l cos θ = 0 falling (the SLIP's, blocks.leg_touchdown) -------
     touchdown = leg_touchdown(
@@ -138,7 +125,7 @@ def _step(sym: Symbols, leg: str, first: int) -> tuple[Phase, Phase, Phase]:
             ),
         ),
         {"energy": flight_energy},
-        points=flight_points(),
+        points=leg_in_flight(sym, xf, l0, drawn),
         point_names=("hip", "foot", "origin"),
     )
 
@@ -172,7 +159,7 @@ def _step(sym: Symbols, leg: str, first: int) -> tuple[Phase, Phase, Phase]:
             ),
         ),
         {"energy": flight_energy},
-        points=flight_points(),
+        points=leg_in_flight(sym, xf, l0, drawn),
         point_names=("hip", "foot", "below_hip"),
     )
     return descent, stance, ascent

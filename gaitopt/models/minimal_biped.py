@@ -120,6 +120,7 @@ def _check_step(model: HybridModel) -> None:
         )
 
 
+@dataclass(frozen=True)
 class _MinimalBiped(HybridModel):
     """Parameters and conventions shared by the walking and running sequences."""
 
@@ -132,6 +133,15 @@ class _MinimalBiped(HybridModel):
     input_bounds: ClassVar[dict[str, tuple[float, float]]] = {"leg_force": (0.0, float("inf"))}
     drawing = (("foot", "hip"),)
     max_phase_time: ClassVar[float] = 5.0
+
+    mass: float = mass_parameter(1.0, "body mass M", _SR)
+    leg_length: float = length_parameter(1.0, "longest leg l_max", _SR)
+    step_length: float = length_parameter(
+        0.6,
+        "step length d, foot to foot (free it to optimise it: free=('step_length',))",
+        "a human-like 0.6 l_max (Srinivasan & Ruina 2006 map the optimum over d)",
+    )
+    gravity: float = gravity_parameter()
 
     def check(self) -> None:
         _check_step(self)
@@ -148,21 +158,6 @@ class _MinimalBiped(HybridModel):
         )
 
 
-def _params():
-    return {
-        "mass": mass_parameter(1.0, "body mass M", _SR),  # fmt: skip
-        "leg_length": length_parameter(1.0, "longest leg l_max", _SR),  # fmt: skip
-        "step_length": length_parameter(
-            0.6,
-            "step length d, foot to foot (free it to optimise it: free=('step_length',))",
-            "a human-like 0.6 l_max (Srinivasan & Ruina 2006 map the optimum over d)",
-        ),
-    }
-
-
-_P = _params()
-
-
 @dataclass(frozen=True)
 class MinimalBipedWalk(_MinimalBiped):
     """Minimal biped, walking: stance state ``r`` (m), ``theta`` (rad), ``r_dot`` (m/s),
@@ -173,11 +168,6 @@ class MinimalBipedWalk(_MinimalBiped):
     declared_states = STANCE
     declared_coordinates = ("r", "theta_dot")
     declared_section_doc = "just after heel strike: r_dot = 0, r·sin(theta) = −step_length/2"
-
-    mass: float = _P["mass"]
-    leg_length: float = _P["leg_length"]
-    step_length: float = _P["step_length"]
-    gravity: float = gravity_parameter()
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
@@ -224,11 +214,6 @@ class MinimalBipedRun(_MinimalBiped):
     declared_states = STANCE
     declared_coordinates = ("theta", "r_dot", "theta_dot")
     declared_section_doc = "just after touchdown: r = leg_length"
-
-    mass: float = _P["mass"]
-    leg_length: float = _P["leg_length"]
-    step_length: float = _P["step_length"]
-    gravity: float = gravity_parameter()
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:

@@ -17,6 +17,8 @@ pieces each writes the same way; every piece returns the expressions the models 
 * :func:`spring_stance` — the SLIP's stance phase (spring leg, its falls and its condition).
 * :func:`foot_stance` — the stance of a leg that carries a force profile and may not pull, drawn
   with the next foothold (the optimisers' runners).
+* :func:`leg_in_flight` — the drawing of a flight: hip, the foot of the leg held at an angle,
+  and the point on the ground below the hip.
 * :func:`flight_to_foothold` — a ballistic flight ending where the hip comes within a leg length
   of the next foothold ``(d, 0)`` (Srinivasan & Ruina's touchdown).
 """
@@ -40,6 +42,7 @@ __all__ = [
     "foot_stance",
     "flight_to_foothold",
     "next_foot",
+    "leg_in_flight",
     "leg_power",
 ]
 
@@ -200,6 +203,22 @@ def spring_stance(
         point_names=("hip", "foot"),
         constraints=(compressed,),
     )
+
+
+def leg_in_flight(
+    sym: Symbols, xf: ca.SX, length: ca.SX, angle: ca.SX, ground: ca.SX | None = None
+) -> ca.Function:
+    """``points(x, p)`` (m) of a flight ``(x, z, ẋ, ż)``: the hip, the foot of a leg of
+    ``length`` held at ``angle`` from vertical (ahead of the hip), and the ground below the hip;
+    heights above ``ground`` (above ``z = 0`` when None)."""
+    x, z = xf[0], xf[1]
+    if ground is None:
+        hip, below = ca.vertcat(x, z), ca.vertcat(x, 0)
+        foot = ca.vertcat(x + length * ca.sin(angle), z - length * ca.cos(angle))
+    else:
+        hip, below = ca.vertcat(x, z - ground), ca.vertcat(x, -ground)
+        foot = ca.vertcat(x + length * ca.sin(angle), z - ground - length * ca.cos(angle))
+    return ca.Function("points", [xf, sym.p], [ca.horzcat(hip, foot, below)])
 
 
 def next_foot(sym: Symbols) -> ca.SX:

@@ -55,7 +55,7 @@ from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols
 from ..parameters import gravity_parameter, parameter
 from .blocks import apex, ballistic_flow, fall, leg_touchdown
-from .polar import UNITS, spring_stance
+from .polar import UNITS, leg_in_flight, spring_stance
 from .quantities import energy_parameter, length_parameter, mass_parameter, stiffness_parameter
 
 __all__ = ["Slip", "SlipSwingLeg", "SWING_LAW_DEGREE"]
@@ -103,24 +103,13 @@ def _build(sym: Symbols, angle_law) -> tuple[tuple[Phase, ...], Section]:
         "fires only if touchdown never armed: the apex was below h + l0·cos θ_td",
     )
     flight_energy = sym.conserved("energy", xf, 0.5 * m * (x_dot**2 + z_dot**2) + m * g * z)
-    descent_points = ca.Function(
-        "points",
-        [xf, sym.p],
-        [
-            ca.horzcat(
-                ca.vertcat(x, z),
-                ca.vertcat(x + l0 * ca.sin(drawn_angle), z - l0 * ca.cos(drawn_angle)),
-                ca.vertcat(x, 0),
-            )
-        ],
-    )
     descent = Phase(
         "descent",
         ("x", "z", "x_dot", "z_dot"),
         ballistic,
         (touchdown, no_touchdown),
         {"energy": flight_energy},
-        points=descent_points,
+        points=leg_in_flight(sym, xf, l0, drawn_angle),
         point_names=("hip", "foot", "origin"),
     )
 
@@ -143,24 +132,13 @@ def _build(sym: Symbols, angle_law) -> tuple[tuple[Phase, ...], Section]:
         z - h,
         "lifted off falling: the hip reaches the ground before any apex",
     )
-    ascent_points = ca.Function(
-        "points",
-        [xf, sym.p],
-        [
-            ca.horzcat(
-                ca.vertcat(x, z - h),
-                ca.vertcat(x + l0 * ca.sin(drawn_angle), z - h - l0 * ca.cos(drawn_angle)),
-                ca.vertcat(x, -h),
-            )
-        ],
-    )
     ascent = Phase(
         "ascent",
         ("x", "z", "x_dot", "z_dot"),
         ballistic,
         (top, no_apex),
         {"energy": flight_energy},
-        points=ascent_points,
+        points=leg_in_flight(sym, xf, l0, drawn_angle, ground=h),
         point_names=("hip", "foot", "below_hip"),
     )
 
