@@ -111,13 +111,14 @@ def parameter(
     return dataclasses.field(default=default, metadata={"gaitopt": spec})
 
 
-def gravity_parameter(source: str = "standard gravity") -> Any:
+def gravity_parameter(source: str = "standard gravity", default: float = STANDARD_GRAVITY) -> Any:
     """The gravitational acceleration ``g`` (m/s², default :data:`STANDARD_GRAVITY`, range
     (0, 100]) as a model parameter: every model with gravity declares it with this, so that its
-    name, unit, default and range are the same in each.  ``source``: where the model's default
-    comes from, if not simply standard gravity (the five-link biped: OptimTraj's value)."""
+    name, unit and range are the same in each.  ``source``: where the model's default comes
+    from, if not simply standard gravity (the five-link biped: OptimTraj's value); ``default``:
+    a paper's own rounding (Grizzle's 9.8 for the three-link walker)."""
     return parameter(
-        STANDARD_GRAVITY,
+        default,
         unit="m/s^2",
         doc="gravitational acceleration g",
         source=source,

@@ -33,9 +33,9 @@ from ..mechanics import (
     lagrange_acceleration,
     potential_energy,
 )
-from ..parameters import gravity_parameter, parameter
+from ..parameters import gravity_parameter
 from .blocks import fall
-from .quantities import length_parameter, mass_parameter
+from .quantities import length_parameter, mass_parameter, slope_parameter
 
 __all__ = ["CompassGait"]
 
@@ -74,14 +74,7 @@ class CompassGait(HybridModel):
     a: float = length_parameter(0.5, "foot to leg mass distance", _DRAKE)
     b: float = length_parameter(0.5, "hip to leg mass distance", _DRAKE)
     gravity: float = gravity_parameter()
-    slope: float = parameter(
-        0.0525,
-        unit="rad",
-        doc="ground slope γ (downhill positive)",
-        source=_DRAKE,
-        low=0.0,
-        high=0.5,
-    )
+    slope: float = slope_parameter(0.0525, _DRAKE, (0.0, 0.5))
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:

@@ -117,7 +117,7 @@ from ..mechanics import (
 )
 from ..parameters import gravity_parameter, parameter
 from .blocks import fall
-from .quantities import length_parameter, mass_parameter
+from .quantities import length_parameter, mass_parameter, slope_parameter
 
 __all__ = ["FiveLinkBiped"]
 
@@ -324,13 +324,11 @@ class FiveLinkBiped(HybridModel):
         0.2, "torso centre of mass below the top of the torso c3 (at most the torso length)"
     )
     gravity: float = gravity_parameter(_OPTIMTRAJ)
-    slope: float = parameter(
+    slope: float = slope_parameter(
         0.0,
-        unit="rad",
+        "level ground, as in OptimTraj",
+        (-0.5, 0.5),
         doc="ground slope γ (downhill positive, walking towards +x)",
-        source="level ground, as in OptimTraj",
-        low=-0.5,
-        high=0.5,
     )
 
     def check(self) -> None:

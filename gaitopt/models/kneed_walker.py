@@ -92,7 +92,7 @@ from ..mechanics import (
 )
 from ..parameters import gravity_parameter, parameter
 from .blocks import fall
-from .quantities import length_parameter, mass_parameter
+from .quantities import length_parameter, mass_parameter, slope_parameter
 
 __all__ = ["KneedWalker"]
 
@@ -240,14 +240,7 @@ class KneedWalker(HybridModel):
     a2: float = length_parameter(0.175, "knee to thigh mass distance", _HSU_CHEN)
     b2: float = length_parameter(0.325, "thigh mass to hip distance", _HSU_CHEN)
     gravity: float = gravity_parameter()
-    slope: float = parameter(
-        0.0504,
-        unit="rad",
-        doc="ground slope γ (downhill positive)",
-        source=_HSU_CHEN,
-        low=0.0,
-        high=0.3,
-    )
+    slope: float = slope_parameter(0.0504, _HSU_CHEN, (0.0, 0.3))
     foot_radius: float = parameter(
         0.0,
         unit="m",

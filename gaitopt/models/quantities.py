@@ -1,5 +1,5 @@
 """Parameters that many models declare alike: masses, lengths, stiffnesses, energies (each
-positive, in SI units) and coefficients of restitution.
+positive, in SI units), coefficients of restitution and the ground's slope.
 
 Each helper is :func:`gaitopt.parameters.parameter` with the unit and range fixed by the kind of
 quantity, so that a mass is a positive number of kilograms in every model, as
@@ -19,6 +19,7 @@ __all__ = [
     "stiffness_parameter",
     "energy_parameter",
     "restitution_parameter",
+    "slope_parameter",
 ]
 
 
@@ -53,4 +54,20 @@ def restitution_parameter(default: float, doc: str, source: str) -> Any:
     (excluded: no bounce), 1 an elastic one (excluded: no loss)."""
     return parameter(
         default, unit="1", doc=doc, source=source, low=0.0, high=1.0, low_open=True, high_open=True
+    )
+
+
+def slope_parameter(
+    default: float,
+    source: str,
+    within: tuple[float, float],
+    *,
+    doc: str = "ground slope γ (downhill positive)",
+    high_open: bool = False,
+) -> Any:
+    """The ground's slope ``γ`` (rad) in the closed range ``within`` (open at the top when
+    ``high_open``)."""
+    low, high = within
+    return parameter(
+        default, unit="rad", doc=doc, source=source, low=low, high=high, high_open=high_open
     )

@@ -38,7 +38,7 @@ import numpy as np
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..mechanics import bodies_function
 from ..parameters import gravity_parameter, parameter
-from .quantities import length_parameter
+from .quantities import length_parameter, slope_parameter
 
 __all__ = ["RimlessWheel"]
 
@@ -72,13 +72,10 @@ class RimlessWheel(HybridModel):
         1.0, "spoke length l", "Drake RimlessWheel default", high=100.0
     )
     gravity: float = gravity_parameter()
-    slope: float = parameter(
+    slope: float = slope_parameter(
         0.08,
-        unit="rad",
-        doc="ground slope γ (downhill positive)",
-        source="Drake RimlessWheel default: produces standing and rolling fixed points",
-        low=0.0,
-        high=1.0,
+        "Drake RimlessWheel default: produces standing and rolling fixed points",
+        (0.0, 1.0),
         high_open=True,
     )
 

@@ -53,6 +53,7 @@ import numpy as np
 
 from ..hybrid import Constraint, HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
+from .quantities import slope_parameter
 
 __all__ = ["Strandbeest", "contact_sequence", "RODS"]
 
@@ -356,13 +357,11 @@ class Strandbeest(HybridModel):
         )
     )
 
-    slope: float = parameter(
+    slope: float = slope_parameter(
         0.02,
-        unit="rad",
+        "chosen: the machine rolls down it passively",
+        (-0.5, 0.5),
         doc="ground slope γ (downhill positive, towards −x)",
-        source="chosen: the machine rolls down it passively",
-        low=-0.5,
-        high=0.5,
     )
     torque: float = parameter(
         0.0,

@@ -102,7 +102,7 @@ import numpy as np
 
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..mechanics import bodies_function, contact_force, impact_velocity, solve_small
-from ..parameters import parameter
+from ..parameters import gravity_parameter, parameter
 from .blocks import fall
 from .quantities import length_parameter, mass_parameter
 
@@ -262,15 +262,7 @@ class ThreeLinkWalker(HybridModel):
     mass_hip: float = _mass(15.0, "hip point mass M_H")
     mass_torso: float = _mass(10.0, "torso point mass M_T")
     torso_length: float = _length(0.5, "hip to torso mass distance L")
-    gravity: float = parameter(
-        9.8,
-        unit="m/s^2",
-        doc="gravitational acceleration g",
-        source=_GRIZZLE,
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+    gravity: float = gravity_parameter(_GRIZZLE, default=9.8)
     omega_n: float = parameter(
         5.0,
         unit="rad/s",
