@@ -91,6 +91,35 @@ def _count(minimum: int, maximum: int | None = None, why: str = "") -> Callable[
     return parse
 
 
+def _count_option(
+    parser: argparse.ArgumentParser,
+    flag: str,
+    default: int,
+    limits: tuple[int, int, str],
+    help: str,
+    metavar: str = "N",
+) -> None:
+    """Declare ``flag N``: a whole number within ``limits = (minimum, maximum, why)`` (see
+    :func:`_count`), with ``(default D, at most M)`` appended to ``help`` (``(default D; m to
+    M)`` when the minimum is not 1)."""
+    low, high, why = limits
+    span = f"at most {high}" if low == 1 else f"{low} to {high}"
+    parser.add_argument(
+        flag,
+        type=_count(low, high, why),
+        default=default,
+        metavar=metavar,
+        help=f"{help} (default {default}{', ' if low == 1 else '; '}{span})",
+    )
+
+
+def _items_option(
+    parser: argparse.ArgumentParser, flag: str, help: str, metavar: str = "STATE=VALUE"
+) -> None:
+    """Declare a repeatable ``flag NAME=VALUE`` (a list of the items given, or None)."""
+    parser.add_argument(flag, action="append", metavar=metavar, help=help)
+
+
 def _scheduler_address(text: str) -> str:
     """An argparse ``type`` for ``--scheduler``: ``local`` or a Dask address with its port
     (``tcp://10.0.0.5:8786``, ``10.0.0.5:8786``)."""
@@ -280,30 +309,26 @@ def _check_point(
 def _model_arguments(parser: argparse.ArgumentParser) -> None:
     """``MODEL`` and ``--set``, shared by the subcommands that act on one model."""
     parser.add_argument("model", metavar="MODEL", help=f"model name (see `{PROG} list`)")
-    parser.add_argument(
-        "--set",
-        action="append",
-        metavar="NAME=VALUE",
-        help="change a parameter from its default (repeatable)",
+    _items_option(
+        parser, "--set", "change a parameter from its default (repeatable)", metavar="NAME=VALUE"
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
 
 
 def _gait_arguments(parser: argparse.ArgumentParser) -> None:
     """``--guess`` and ``--steps``: which gait to find (shared by ``solve`` and ``continue``)."""
-    parser.add_argument(
+    _items_option(
+        parser,
         "--guess",
-        action="append",
-        metavar="STATE=VALUE",
-        help="initial guess of a section coordinate (repeatable; others from the default start)",
+        "initial guess of a section coordinate (repeatable; others from the default start)",
     )
-    parser.add_argument(
+    _count_option(
+        parser,
         "--steps",
-        type=_count(1, MAX_ORBIT_STEPS, _ORBIT_LIMIT),
-        default=1,
+        1,
+        (1, MAX_ORBIT_STEPS, _ORBIT_LIMIT),
+        "returns to the section per orbit, 2 for a period-2 gait",
         metavar="K",
-        help=f"returns to the section per orbit (2: a period-2 gait; default 1, at most "
-        f"{MAX_ORBIT_STEPS})",
     )
 
 

@@ -33,20 +33,20 @@ HELP = "kinematics of a leg linkage (Jansen's Strandbeest): foot path, ground co
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare ``LINKAGE``, ``--set``, ``--samples`` and ``--json``."""
     parser.add_argument("linkage", metavar="LINKAGE", help=f"one of: {', '.join(LINKAGES)}")
-    parser.add_argument(
-        "--set",
-        action="append",
-        metavar="NAME=VALUE",
-        help="change a length (m), e.g. --set j=0.52 (repeatable; see `gaitopt linkage jansen`)",
-    )
-    from .common import _count
+    from .common import _count_option, _items_option
 
-    parser.add_argument(
+    _items_option(
+        parser,
+        "--set",
+        "change a length (m), e.g. --set j=0.52 (repeatable; see `gaitopt linkage jansen`)",
+        metavar="NAME=VALUE",
+    )
+    _count_option(
+        parser,
         "--samples",
-        type=_count(16, MAX_SAMPLES, SAMPLES_LIMIT),
-        default=720,
-        metavar="N",
-        help=f"crank steps per turn of the continuation (default 720; 16 to {MAX_SAMPLES})",
+        720,
+        (16, MAX_SAMPLES, SAMPLES_LIMIT),
+        "crank steps per turn of the continuation",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
 
