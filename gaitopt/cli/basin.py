@@ -156,21 +156,10 @@ def run(args: argparse.Namespace) -> int:
             print_header(gait)
         return EXIT_NOT_FOUND
     try:
-        estimate = basin(
-            gait,
-            rays=args.rays,
-            steps=args.steps,
-            max_radius=args.max_radius,
-            scheduler=args.scheduler,
-        )
+        shared = {"steps": args.steps, "scheduler": args.scheduler}
+        estimate = basin(gait, rays=args.rays, max_radius=args.max_radius, **shared)
         rayed = time.perf_counter()
-        fraction = basin_fraction(
-            gait,
-            samples=args.samples,
-            steps=args.steps,
-            window=args.max_radius,
-            scheduler=args.scheduler,
-        )
+        fraction = basin_fraction(gait, samples=args.samples, window=args.max_radius, **shared)
     except OSError as exc:  # a Dask scheduler that cannot be reached
         raise InputError(f"--scheduler {args.scheduler}: cannot reach it ({exc})") from None
     done = time.perf_counter()

@@ -4,7 +4,6 @@ parameters, states and shared arguments (printing and ``--out``: :mod:`gaitopt.c
 from __future__ import annotations
 
 import argparse
-import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, NoReturn
@@ -148,15 +147,18 @@ def _split(option: str, item: str, examples: Mapping[str, str]) -> tuple[str, st
     return name, text
 
 
-def _number(option: str, item: str, text: str, example: str) -> float:
-    """A finite float from ``text`` (``0.09``, ``1e-2``), or an :class:`InputError`."""
+def _number(
+    option: str, item: str, text: str, example: str, parse: Callable[[str], Any] = float
+) -> Any:
+    """A finite number ``parse(text)`` (a float by default: ``0.09``, ``1e-2``), or an
+    :class:`InputError` naming ``option item`` with the ``example``."""
     try:
-        value = float(text)
+        value = parse(text)
     except ValueError:
         raise InputError(
             f"{option} {item}: {text!r} is not a number; e.g. {option} {example}"
         ) from None
-    if not math.isfinite(value):
+    if not np.isfinite(value):
         raise InputError(f"{option} {item}: {text!r} is not finite; e.g. {option} {example}")
     return value
 
@@ -197,14 +199,20 @@ def _model_class(name: str) -> type[HybridModel]:
         raise InputError(f"MODEL {name}: {exc}") from None
 
 
-def _parameter(model_name: str, specs: Mapping[str, ParameterSpec], item: str) -> tuple[str, float]:
-    """One ``--set NAME=VALUE``: a known parameter, a number, in its range."""
+def _parameter(
+    model_name: str,
+    specs: Mapping[str, ParameterSpec],
+    item: str,
+    listing: str = "parameters: {} (see `" + PROG + " list`)",
+) -> tuple[str, float]:
+    """One ``--set NAME=VALUE``: a known parameter, a number, in its range; ``listing`` (with
+    ``{}`` for the names) ends the message for an unknown name."""
     examples = {name: f"{name}={spec.default:g}" for name, spec in specs.items()}
     name, text = _split("--set", item, examples)
     if name not in specs:
         raise InputError(
             f"--set {item}: {model_name} has no parameter {name!r}; "
-            f"{did_you_mean(name, specs)}parameters: {', '.join(specs)} (see `{PROG} list`)"
+            f"{did_you_mean(name, specs)}{listing.format(', '.join(specs))}"
         )
     value = _number("--set", item, text, examples[name])
     try:
@@ -333,18 +341,11 @@ def _gait_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _numbers(option: str, text: str | None, kind: type = float) -> list | None:
-    """``--q 1,2,3``: a list of finite numbers (``None`` if the option is absent)."""
+    """``--q 1,2,3``: a list of finite numbers (``None`` if the option is absent); ``kind``
+    ``complex`` reads ``1+2i`` as ``1+2j``."""
     if text is None:
         return None
-    values = []
-    for part in text.split(","):
-        try:
-            value = kind(part.strip().replace("i", "j"))
-        except ValueError:
-            raise InputError(
-                f"{option} {text}: {part.strip()!r} is not a number; e.g. {option} 1,0.5"
-            ) from None
-        if not np.isfinite(value):
-            raise InputError(f"{option} {text}: {part.strip()!r} is not finite")
-        values.append(value)
-    return values
+    return [
+        _number(option, text, part.strip(), "1,0.5", lambda t: kind(t.replace("i", "j")))
+        for part in text.split(",")
+    ]

@@ -23,7 +23,6 @@ from typing import Any
 from ..errors import ParameterError, did_you_mean
 from ..linkage import LINKAGES
 from ..linkage.jansen import MAX_SAMPLES, SAMPLES_LIMIT
-from ..parameters import check_parameter
 
 __all__ = ["HELP", "add_arguments", "run", "describe"]
 
@@ -59,7 +58,7 @@ def describe(name: str, settings: list[str] | None, samples: int) -> dict[str, A
     gaitopt.cli.InputError
         For bad input, on one line naming the argument.
     """
-    from .common import InputError, _echo, _number, _split
+    from .common import InputError, _echo, _parameter
 
     if name not in LINKAGES:
         raise InputError(
@@ -70,20 +69,8 @@ def describe(name: str, settings: list[str] | None, samples: int) -> dict[str, A
         raise InputError(f"--samples {samples}: expected an integer >= 16, e.g. --samples 720")
     cls = LINKAGES[name]
     specs = {spec.name: spec for spec in cls.parameter_specs()}
-    examples = {n: f"{n}={spec.default:g}" for n, spec in specs.items()}
-    lengths = {}
-    for item in settings or ():
-        key, text = _split("--set", item, examples)
-        if key not in specs:
-            raise InputError(
-                f"--set {item}: {name} has no parameter {key!r}; {did_you_mean(key, specs)}"
-                f"parameters (lengths, m): {', '.join(specs)}"
-            )
-        value = _number("--set", item, text, examples[key])
-        try:
-            lengths[key] = check_parameter(name, specs[key], value)
-        except ParameterError as exc:
-            raise InputError(f"--set {item}: {exc}") from None
+    listing = "parameters (lengths, m): {}"
+    lengths = dict(_parameter(name, specs, item, listing) for item in settings or ())
     try:
         numbers = cls(**lengths).numbers(samples)
     except ParameterError as exc:  # the leg cannot be assembled through a whole turn
