@@ -35,7 +35,7 @@ from ..mechanics import (
 )
 from ..parameters import gravity_parameter
 from .blocks import fall
-from .quantities import length_parameter, mass_parameter, slope_parameter
+from .quantities import length_parameter, mass_parameter, slope_parameter, state_units
 
 __all__ = ["CompassGait"]
 
@@ -57,12 +57,7 @@ class CompassGait(HybridModel):
     declared_states = ("stance", "swing", "stance_dot", "swing_dot")
     declared_coordinates = ("stance", "stance_dot", "swing_dot")
     declared_section_doc = "just after heel strike: swing = 2·slope − stance"
-    state_units = {
-        "stance": "rad",
-        "swing": "rad",
-        "stance_dot": "rad/s",
-        "swing_dot": "rad/s",
-    }  # for axis labels
+    state_units = state_units(stance="rad", swing="rad")  # for axis labels
     title = "Compass gait"
     reference = "Goswami, Thuilot & Espiau 1996; Drake CompassGait"
     inputs = ("hip_torque",)

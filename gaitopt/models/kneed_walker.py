@@ -92,7 +92,7 @@ from ..mechanics import (
 )
 from ..parameters import gravity_parameter, parameter
 from .blocks import fall
-from .quantities import length_parameter, mass_parameter, slope_parameter
+from .quantities import length_parameter, mass_parameter, slope_parameter, state_units
 
 __all__ = ["KneedWalker"]
 
@@ -218,14 +218,7 @@ class KneedWalker(HybridModel):
     declared_states = ("q1", "q2", "q3", "q1_dot", "q2_dot", "q3_dot")
     declared_coordinates = ("q1", "q1_dot", "q2_dot")
     declared_section_doc = "just after heel strike: q2 = q3 = 2·slope − q1, q3_dot = q2_dot"
-    state_units = {
-        "q1": "rad",
-        "q2": "rad",
-        "q3": "rad",
-        "q1_dot": "rad/s",
-        "q2_dot": "rad/s",
-        "q3_dot": "rad/s",
-    }  # for axis labels
+    state_units = state_units(q1="rad", q2="rad", q3="rad")  # for axis labels
     title = "Kneed walker"
     reference = "Hsu Chen 2007; McGeer 1990; Tedrake, Underactuated Robotics"
     inputs = ("hip_torque", "knee_torque")

@@ -102,7 +102,7 @@ from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import apex, fall
-from .quantities import length_parameter, mass_parameter, stiffness_parameter
+from .quantities import length_parameter, mass_parameter, state_units, stiffness_parameter
 
 __all__ = ["OneDHopper"]
 
@@ -130,7 +130,7 @@ class OneDHopper(HybridModel):
     declared_states = ("z_b", "l", "z_b_dot", "l_dot")
     declared_coordinates = ("z_b",)
     declared_section_doc = "apex: z_b_dot = 0, leg on its hard stop (l = 0, l_dot = 0)"
-    state_units = {"z_b": "m", "l": "m", "z_b_dot": "m/s", "l_dot": "m/s", "delta": "m"}
+    state_units = {**state_units(z_b="m", l="m"), "delta": "m"}
     title = "One-dimensional hopper (deadbeat preload)"
     reference = "Tedrake, Underactuated Robotics, One-Dimensional Hopper exercise; Raibert 1984"
     mesh = (4, 4)

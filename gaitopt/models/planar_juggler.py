@@ -80,7 +80,7 @@ import numpy as np
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import fall
-from .quantities import length_parameter, restitution_parameter
+from .quantities import length_parameter, restitution_parameter, state_units
 
 __all__ = ["PlanarJuggler"]
 
@@ -106,14 +106,7 @@ class PlanarJuggler(HybridModel):
         "just before an impact: x = impact position, x_dot_pre, energy_pre = pre-impact horizontal"
         " velocity and energy; y on the paddle, velocities after the impact"
     )
-    state_units = {
-        "x": "m",
-        "y": "m",
-        "x_dot": "m/s",
-        "y_dot": "m/s",
-        "x_dot_pre": "m/s",
-        "energy_pre": "J/kg",
-    }  # for axis labels
+    state_units = {**state_units(x="m", y="m"), "x_dot_pre": "m/s", "energy_pre": "J/kg"}
     title = "Planar juggler (one-link paddle, mirror law)"
     reference = "Buehler, Koditschek & Kindlmann 1990"
     mesh = (4, 4)

@@ -31,6 +31,7 @@ import casadi as ca
 
 from ..hybrid import Constraint, Phase, Symbols, Transition
 from .blocks import ballistic_flow, fall, hip_about_foot
+from .quantities import state_units
 
 __all__ = [
     "STANCE",
@@ -51,16 +52,7 @@ STANCE = ("r", "theta", "r_dot", "theta_dot")
 #: Flight state: the hip's Cartesian coordinates.
 FLIGHT = ("x", "z", "x_dot", "z_dot")
 #: Units of both (for axis labels).
-UNITS = {
-    "x": "m",
-    "z": "m",
-    "x_dot": "m/s",
-    "z_dot": "m/s",
-    "r": "m",
-    "theta": "rad",
-    "r_dot": "m/s",
-    "theta_dot": "rad/s",
-}
+UNITS = {**state_units(x="m", z="m"), **state_units(r="m", theta="rad")}
 _HIP_ABOVE = "the body cannot go below the ground"
 
 

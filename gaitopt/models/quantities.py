@@ -1,5 +1,6 @@
 """Parameters that many models declare alike: masses, lengths, stiffnesses, energies (each
-positive, in SI units), coefficients of restitution and the ground's slope.
+positive, in SI units), coefficients of restitution and the ground's slope; and the units of a
+state (:func:`state_units`).
 
 Each helper is :func:`gaitopt.parameters.parameter` with the unit and range fixed by the kind of
 quantity, so that a mass is a positive number of kilograms in every model, as
@@ -20,6 +21,7 @@ __all__ = [
     "energy_parameter",
     "restitution_parameter",
     "slope_parameter",
+    "state_units",
 ]
 
 
@@ -71,3 +73,10 @@ def slope_parameter(
     return parameter(
         default, unit="rad", doc=doc, source=source, low=low, high=high, high_open=high_open
     )
+
+
+def state_units(**coordinates: str) -> dict[str, str]:
+    """Units of the coordinates and of their rates ``<name>_dot`` (the unit per second), for
+    axis labels: ``state_units(stance="rad", swing="rad")`` is ``{"stance": "rad", "swing":
+    "rad", "stance_dot": "rad/s", "swing_dot": "rad/s"}``."""
+    return {**coordinates, **{f"{name}_dot": f"{unit}/s" for name, unit in coordinates.items()}}

@@ -67,7 +67,7 @@ from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import apex, ballistic_flow, fall, hip_about_foot, leg_touchdown
-from .quantities import length_parameter, mass_parameter, stiffness_parameter
+from .quantities import length_parameter, mass_parameter, state_units, stiffness_parameter
 
 __all__ = ["RaibertHopper", "FLIGHT_STATES", "STANCE_STATES"]
 
@@ -161,18 +161,7 @@ class RaibertHopper(HybridModel):
     declared_coordinates = ("z", "phi", "x_dot", "phi_dot")
     declared_section_doc = "apex: z_dot = 0, x = 0"
     drawing = (("hip", "foot"), ("tail", "nose"))  # leg and body; other points are helpers
-    state_units = {
-        "x": "m",
-        "z": "m",
-        "phi": "rad",
-        "x_dot": "m/s",
-        "z_dot": "m/s",
-        "phi_dot": "rad/s",
-        "r": "m",
-        "theta": "rad",
-        "r_dot": "m/s",
-        "theta_dot": "rad/s",
-    }  # for axis labels
+    state_units = {**state_units(x="m", z="m", phi="rad"), **state_units(r="m", theta="rad")}
     title = "Planar Raibert hopper (three-part controller)"
     reference = "Raibert 1986; Raibert, Brown & Chepponis 1984"
     mesh = (4, 4)

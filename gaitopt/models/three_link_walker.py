@@ -104,7 +104,7 @@ from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..mechanics import bodies_function, contact_force, impact_velocity, solve_small
 from ..parameters import gravity_parameter, parameter
 from .blocks import fall
-from .quantities import length_parameter, mass_parameter
+from .quantities import length_parameter, mass_parameter, state_units
 
 __all__ = ["ThreeLinkWalker"]
 
@@ -226,14 +226,7 @@ class ThreeLinkWalker(HybridModel):
     declared_section_doc = "just after the impact: swing = impact_angle"
     title = "Three-link walker (virtual constraints, I/O linearisation)"
     reference = "Grizzle, Abba & Plestan 2001 (IEEE TAC 46(1)); issue 20"
-    state_units = {
-        "stance": "rad",
-        "swing": "rad",
-        "torso": "rad",
-        "stance_dot": "rad/s",
-        "swing_dot": "rad/s",
-        "torso_dot": "rad/s",
-    }
+    state_units = state_units(stance="rad", swing="rad", torso="rad")
     drawing = (("stance_foot", "hip", "swing_foot"), ("hip", "torso"))
     mesh = (4, 4)
     #: Names of the torques (columns of :meth:`torques`), N·m.

@@ -79,7 +79,7 @@ from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import apex, ballistic_flow, fall
-from .quantities import length_parameter, mass_parameter, stiffness_parameter
+from .quantities import length_parameter, mass_parameter, state_units, stiffness_parameter
 
 __all__ = ["VerticalHopper"]
 
@@ -98,13 +98,7 @@ class VerticalHopper(HybridModel):
     declared_states = ("y", "y_dot")
     declared_coordinates = ("y",)
     declared_section_doc = "apex: y_dot = 0"
-    state_units = {
-        "y": "m",
-        "y_dot": "m/s",
-        "apex_energy": "J",
-        "dissipated": "J",
-        "delta": "m",
-    }  # for axis labels
+    state_units = {**state_units(y="m"), "apex_energy": "J", "dissipated": "J", "delta": "m"}
     title = "Vertical hopper (energy-controlled thrust)"
     reference = "Raibert 1984, 1986; Tedrake, Underactuated Robotics"
     inputs = ("thrust_offset",)
