@@ -78,14 +78,8 @@ class ParameterSpec:
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready description (``gaitopt list --json``)."""
-        return {
-            "name": self.name,
-            "unit": self.unit,
-            "default": self.default,
-            "doc": self.doc,
-            "source": self.source,
-            "range": self.range_text(),
-        }
+        fields = ("name", "unit", "default", "doc", "source")
+        return {**{key: getattr(self, key) for key in fields}, "range": self.range_text()}
 
 
 def _fmt(x: float) -> str:
@@ -117,14 +111,9 @@ def gravity_parameter(source: str = "standard gravity", default: float = STANDAR
     name, unit and range are the same in each.  ``source``: where the model's default comes
     from, if not simply standard gravity (the five-link biped: OptimTraj's value); ``default``:
     a paper's own rounding (Grizzle's 9.8 for the three-link walker)."""
+    doc = "gravitational acceleration g"
     return parameter(
-        default,
-        unit="m/s^2",
-        doc="gravitational acceleration g",
-        source=source,
-        low=0.0,
-        high=100.0,
-        low_open=True,
+        default, unit="m/s^2", doc=doc, source=source, low=0.0, high=100.0, low_open=True
     )
 
 

@@ -59,7 +59,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..hybrid import Phase, Section, Symbols, Transition
 from .blocks import apex, ballistic_flow, fall
-from .planar_quadruped import _FLIGHT, _hips, _QuadrupedBase
+from .planar_quadruped import _FLIGHT, POINT_NAMES, _hips, _QuadrupedBase
 from .raibert_hopper import (
     attitude_damping_parameter,
     attitude_gain_parameter,
@@ -212,7 +212,7 @@ class _Legs:
         return ca.Function("points", [x, self.sym.p], [ca.horzcat(*cols)])
 
 
-_NAMES = ("back_hip", "front_hip", "back_foot", "front_foot")
+_NAMES = POINT_NAMES
 
 
 @dataclass(frozen=True)
