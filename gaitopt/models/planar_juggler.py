@@ -80,6 +80,7 @@ import numpy as np
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import fall
+from .line_juggler import energy_gain_parameter, impact_speed_parameter
 from .quantities import length_parameter, restitution_parameter, state_units
 
 __all__ = ["PlanarJuggler"]
@@ -120,13 +121,8 @@ class PlanarJuggler(HybridModel):
     restitution: float = restitution_parameter(
         0.8, "coefficient of restitution e of the ball on the paddle", "as the line juggler"
     )
-    kappa1: float = parameter(
-        0.04,
-        unit="s^2/m^2",
-        doc="energy-feedback gain κ1 of the mirror law (per unit mass)",
-        source="as the line juggler: stable range (0, 2/((1+e) ḃ_d²)) = (0, 0.1235)",
-        low=0.0,
-        high=10.0,
+    kappa1: float = energy_gain_parameter(
+        "as the line juggler: stable range (0, 2/((1+e) ḃ_d²)) = (0, 0.1235)"
     )
     kappa_x: float = parameter(
         0.15,
@@ -144,15 +140,7 @@ class PlanarJuggler(HybridModel):
         low=-10.0,
         high=10.0,
     )
-    desired_speed: float = parameter(
-        3.0,
-        unit="m/s",
-        doc="desired impact speed ḃ_d (E_d = ½ ḃ_d²)",
-        source="as the line juggler",
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+    desired_speed: float = impact_speed_parameter("as the line juggler")
     desired_position: float = length_parameter(
         0.5,
         "desired impact point x̄ on the paddle (distance from the pivot)",

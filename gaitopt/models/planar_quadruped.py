@@ -108,6 +108,34 @@ def _hips(q):
     return out  # [back, front]
 
 
+def _drawing(sym: Symbols, x: ca.SX, hips, l0: ca.SX, feet) -> ca.Function:
+    """``points(x, p)`` (m): the back and front hips, then each foot of ``feet = [(hip, foot,
+    angle), ...]``: on the ground at ``(foot, 0)``, or, ``foot`` None, held at ``angle`` from
+    vertical at the rest length ``l0`` below its hip."""
+    back, front = hips
+    cols = [ca.vertcat(back[0], back[1]), ca.vertcat(front[0], front[1])]
+    for hip, foot, angle in feet:
+        if foot is None:
+            cols.append(ca.vertcat(hip[0] + l0 * ca.sin(angle), hip[1] - l0 * ca.cos(angle)))
+        else:
+            cols.append(ca.vertcat(foot, 0))
+    return ca.Function("points", [x, sym.p], [ca.horzcat(*cols)])
+
+
+def _touchdown_angle(leg: str):
+    """The nominal touchdown angle of the ``leg`` ("back", "front") as a parameter (rad)."""
+    return parameter(
+        0.21,
+        unit="rad",
+        doc=f"nominal {leg}-leg touchdown angle from vertical (foot ahead > 0)",
+        source="chosen: a passive bound exists there (found by tests/test_planar_quadruped.py)",
+        low=-math.pi / 2,
+        high=math.pi / 2,
+        low_open=True,
+        high_open=True,
+    )
+
+
 class _Legs:
     """The symbolic pieces shared by the phases (built inside ``build``)."""
 
@@ -250,16 +278,7 @@ class _Legs:
 
     def points(self, x, feet):
         """Drawing: back hip, front hip, and each foot (on the ground or held in flight)."""
-        back, front = self.hips(x)
-        cols = [ca.vertcat(back[0], back[1]), ca.vertcat(front[0], front[1])]
-        for hip, foot, angle in feet:
-            if foot is None:
-                cols.append(
-                    ca.vertcat(hip[0] + self.l0 * ca.sin(angle), hip[1] - self.l0 * ca.cos(angle))
-                )
-            else:
-                cols.append(ca.vertcat(foot, 0))
-        return ca.Function("points", [x, self.sym.p], [ca.horzcat(*cols)])
+        return _drawing(self.sym, x, self.hips(x), self.l0, feet)
 
     def apex_section(self, x, coordinates):
         top = apex(
@@ -384,26 +403,8 @@ class PlanarQuadruped(_QuadrupedBase):
         "front_touchdown_angle": (-math.pi / 2, math.pi / 2),
     }
 
-    back_touchdown_angle: float = parameter(
-        0.21,
-        unit="rad",
-        doc="nominal back-leg touchdown angle from vertical (foot ahead > 0)",
-        source="chosen: a passive bound exists there (found by tests/test_planar_quadruped.py)",
-        low=-math.pi / 2,
-        high=math.pi / 2,
-        low_open=True,
-        high_open=True,
-    )
-    front_touchdown_angle: float = parameter(
-        0.21,
-        unit="rad",
-        doc="nominal front-leg touchdown angle from vertical (foot ahead > 0)",
-        source="chosen: a passive bound exists there (found by tests/test_planar_quadruped.py)",
-        low=-math.pi / 2,
-        high=math.pi / 2,
-        low_open=True,
-        high_open=True,
-    )
+    back_touchdown_angle: float = _touchdown_angle("back")
+    front_touchdown_angle: float = _touchdown_angle("front")
     energy: float = energy_parameter(
         90.0,
         "total energy E (kinetic + m g z + spring)",

@@ -59,7 +59,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..hybrid import Phase, Section, Symbols, Transition
 from .blocks import apex, ballistic_flow, fall
-from .planar_quadruped import _FLIGHT, POINT_NAMES, _hips, _QuadrupedBase
+from .planar_quadruped import _FLIGHT, POINT_NAMES, _drawing, _hips, _QuadrupedBase
 from .raibert_hopper import (
     attitude_damping_parameter,
     attitude_gain_parameter,
@@ -199,17 +199,9 @@ class _Legs:
         )
 
     def points(self, x, back_foot=None, front_foot=None):
-        back, front = self.hips(x)
-        cols = [ca.vertcat(back[0], back[1]), ca.vertcat(front[0], front[1])]
-        th = self.angle(x)
-        for hip, foot in ((back, back_foot), (front, front_foot)):
-            if foot is None:
-                cols.append(
-                    ca.vertcat(hip[0] + self.l0 * ca.sin(th), hip[1] - self.l0 * ca.cos(th))
-                )
-            else:
-                cols.append(ca.vertcat(foot, 0))
-        return ca.Function("points", [x, self.sym.p], [ca.horzcat(*cols)])
+        hips, th = self.hips(x), self.angle(x)
+        feet = [(hips[0], back_foot, th), (hips[1], front_foot, th)]
+        return _drawing(self.sym, x, hips, self.l0, feet)
 
 
 _NAMES = POINT_NAMES
