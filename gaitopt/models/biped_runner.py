@@ -176,15 +176,11 @@ def _leg_parameter(kind: str, leg: str):
     if kind == "rest_length":
         return length_parameter(1.0, f"leg {L} rest length l_{leg}", _TEDRAKE)
     return parameter(
-        math.pi / 6,
-        unit="rad",
+        math.pi / 6, unit="rad", low=0.0, high=math.pi / 2, high_open=True,
         doc=f"nominal touchdown angle θ_{leg} of leg {L} from vertical (the per-step input's "
         f"default)",
         source=_TEDRAKE + ": 30°",
-        low=0.0,
-        high=math.pi / 2,
-        high_open=True,
-    )
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)

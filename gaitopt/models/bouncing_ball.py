@@ -88,23 +88,15 @@ class BouncingBall(HybridModel):
         "Guckenheimer & Holmes §2.4 figures use α = e = 0.5",
     )
     acceleration: float = parameter(
-        1.2,
-        unit="1",
+        1.2, unit="1", low=0.0, high=20.0, low_open=True,
         doc="peak table acceleration relative to gravity Γ = A ω²/g",
         source="inside the period-1 stability window (1.047, 1.527) at e = 0.5",
-        low=0.0,
-        high=20.0,
-        low_open=True,
-    )
+    )  # fmt: skip
     frequency: float = parameter(
-        5.0,
-        unit="Hz",
+        5.0, unit="Hz", low=0.0, high=1e3, low_open=True,
         doc="table frequency f (ω = 2π f)",
         source="a slow paddle: flights of a few cm, table amplitude ≈ 1 cm·Γ",
-        low=0.0,
-        high=1e3,
-        low_open=True,
-    )
+    )  # fmt: skip
     gravity: float = gravity_parameter()
 
     @classmethod

@@ -235,13 +235,10 @@ class KneedWalker(HybridModel):
     gravity: float = gravity_parameter()
     slope: float = slope_parameter(0.0504, _HSU_CHEN, (0.0, 0.3))
     foot_radius: float = parameter(
-        0.0,
-        unit="m",
+        0.0, unit="m", low=0.0, high=1.0,
         doc="radius R of the circular-arc feet (0: point feet); at most the shank length a1 + b1",
         source="point foot (Hsu Chen 2007); curved feet after McGeer 1990",
-        low=0.0,
-        high=1.0,
-    )
+    )  # fmt: skip
 
     def check(self) -> None:
         shank = self.a1 + self.b1

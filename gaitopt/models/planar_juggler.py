@@ -125,21 +125,15 @@ class PlanarJuggler(HybridModel):
         "as the line juggler: stable range (0, 2/((1+e) ḃ_d²)) = (0, 0.1235)"
     )
     kappa_x: float = parameter(
-        0.15,
-        unit="rad/m",
+        0.15, unit="rad/m", low=-10.0, high=10.0,
         doc="horizontal-position gain κ_x of the mirror law (paddle tilt per metre of x − x̄)",
         source="inside the stable range (0, (4 − 2 a κ_ẋ)/(a T)) = (0, 0.884) at the defaults",
-        low=-10.0,
-        high=10.0,
-    )
+    )  # fmt: skip
     kappa_xdot: float = parameter(
-        0.1,
-        unit="rad s/m",
+        0.1, unit="rad s/m", low=-10.0, high=10.0,
         doc="horizontal-velocity gain κ_ẋ of the mirror law",
         source="inside the stable range (0, 2/((1+e) ḃ_d)) = (0, 0.370); deadbeat at 0.185",
-        low=-10.0,
-        high=10.0,
-    )
+    )  # fmt: skip
     desired_speed: float = impact_speed_parameter("as the line juggler")
     desired_position: float = length_parameter(
         0.5,

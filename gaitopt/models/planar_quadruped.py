@@ -125,15 +125,10 @@ def _drawing(sym: Symbols, x: ca.SX, hips, l0: ca.SX, feet) -> ca.Function:
 def _touchdown_angle(leg: str):
     """The nominal touchdown angle of the ``leg`` ("back", "front") as a parameter (rad)."""
     return parameter(
-        0.21,
-        unit="rad",
+        0.21, unit="rad", low=-math.pi / 2, high=math.pi / 2, low_open=True, high_open=True,
         doc=f"nominal {leg}-leg touchdown angle from vertical (foot ahead > 0)",
         source="chosen: a passive bound exists there (found by tests/test_planar_quadruped.py)",
-        low=-math.pi / 2,
-        high=math.pi / 2,
-        low_open=True,
-        high_open=True,
-    )
+    )  # fmt: skip
 
 
 class _Legs:
@@ -331,14 +326,9 @@ class _QuadrupedBase(HybridModel):
 
     mass: float = mass_parameter(20.865, "body mass m", _PAPER)
     inertia: float = parameter(
-        1.3,
-        unit="kg*m^2",
-        doc="pitch moment of inertia I about the COM",
-        source=_PAPER,
-        low=0.0,
-        high=1e4,
-        low_open=True,
-    )
+        1.3, unit="kg*m^2", low=0.0, high=1e4, low_open=True,
+        doc="pitch moment of inertia I about the COM", source=_PAPER,
+    )  # fmt: skip
     half_length: float = length_parameter(0.276, "hip distance L from the COM (hips at ±L)", _PAPER)
     rest_length: float = length_parameter(0.323, "leg rest length l0", _PAPER)
     stiffness: float = stiffness_parameter(3520.0, "leg stiffness k (each sagittal leg)", _PAPER)
@@ -510,15 +500,11 @@ class PlanarQuadrupedPronk(_QuadrupedBase):
     input_bounds: ClassVar[dict[str, tuple[float, float]]] = {"touchdown_angle": (0.0, math.pi / 2)}
 
     touchdown_angle: float = parameter(
-        0.25,
-        unit="rad",
+        0.25, unit="rad", low=0.0, high=math.pi / 2, high_open=True,
         doc="nominal touchdown angle of both legs from vertical",
         source="chosen: a passive pronk exists there "
         "(the SLIP(2k) gait, tests/test_planar_quadruped.py)",
-        low=0.0,
-        high=math.pi / 2,
-        high_open=True,
-    )
+    )  # fmt: skip
     energy: float = energy_parameter(
         90.0,
         "total energy E (kinetic + m g z + spring)",

@@ -104,14 +104,9 @@ def desired_speed_parameter(source: str) -> Any:
 def speed_gain_parameter(default: float, source: str, *, low: float = -1.0) -> Any:
     """The speed gain ``k_ẋ`` (s) of the foot-placement law, range [low, 1] (open at 0)."""
     return parameter(
-        default,
-        unit="s",
-        doc="speed gain k_ẋ " + _PLACEMENT,
-        source=source,
-        low=low,
-        high=1.0,
-        low_open=low == 0.0,
-    )
+        default, unit="s", low=low, high=1.0, low_open=low == 0.0,
+        doc="speed gain k_ẋ " + _PLACEMENT, source=source,
+    )  # fmt: skip
 
 
 def attitude_gain_parameter(default: float, source: str, *, positive: bool = False) -> Any:
@@ -169,14 +164,9 @@ class RaibertHopper(HybridModel):
 
     mass: float = mass_parameter(10.0, "body mass M", _SIZE)
     inertia: float = parameter(
-        0.5,
-        unit="kg m^2",
-        doc="body pitch inertia J about its centre of mass (at the hip)",
-        source=_SIZE,
-        low=0.0,
-        high=1e4,
-        low_open=True,
-    )
+        0.5, unit="kg m^2", low=0.0, high=1e4, low_open=True,
+        doc="body pitch inertia J about its centre of mass (at the hip)", source=_SIZE,
+    )  # fmt: skip
     rest_length: float = length_parameter(0.5, "leg rest length l0 in flight", _SIZE)
     stiffness: float = stiffness_parameter(
         4000.0,

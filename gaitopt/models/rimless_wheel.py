@@ -60,14 +60,9 @@ class RimlessWheel(HybridModel):
     state_units = {"theta": "rad", "theta_dot": "rad/s"}
 
     spokes: float = parameter(
-        8,
-        unit="1",
-        doc="number of spokes",
-        source="Drake RimlessWheel default",
-        low=3,
-        high=64,
-        integer=True,
-    )
+        8, unit="1", low=3, high=64, integer=True,
+        doc="number of spokes", source="Drake RimlessWheel default",
+    )  # fmt: skip
     length: float = length_parameter(
         1.0, "spoke length l", "Drake RimlessWheel default", high=100.0
     )

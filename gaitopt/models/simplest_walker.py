@@ -95,13 +95,10 @@ class SimplestWalker(HybridModel):
     # moves to steeper slopes with k (problems/simplest_walker_pd_curve.py) and leaves the
     # slope range (0.05 rad) near k ≈ 0.685.
     hip_stiffness: float = parameter(
-        0.0,
-        unit="m_f*g*l/rad",
+        0.0, unit="m_f*g*l/rad", low=0.0, high=10.0,
         doc="hip spring stiffness k (Kuo 2002), scaled by the foot mass",
         source="Garcia et al. 1998: none (0); Kuo 2002 adds it to tune the step frequency",
-        low=0.0,
-        high=10.0,
-    )
+    )  # fmt: skip
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:

@@ -182,14 +182,10 @@ class Slip(HybridModel):
         8397.36, "leg stiffness k (k̃ = k l0/(m g) = 10.7 at the defaults)", _TEDRAKE + ": k̃ = 10.7"
     )
     touchdown_angle: float = parameter(
-        math.pi / 6,
-        unit="rad",
+        math.pi / 6, unit="rad", low=0.0, high=math.pi / 2, high_open=True,
         doc="nominal touchdown angle θ_td from vertical (the per-step input's default)",
         source=_TEDRAKE + ": 30°",
-        low=0.0,
-        high=math.pi / 2,
-        high_open=True,
-    )
+    )  # fmt: skip
     gravity: float = gravity_parameter()
     energy: float = energy_parameter(
         1263.528,
@@ -197,13 +193,10 @@ class Slip(HybridModel):
         _TEDRAKE + ": Ẽ = 1.61",
     )
     ground_height: float = parameter(
-        0.0,
-        unit="m",
+        0.0, unit="m", low=-10.0, high=10.0,
         doc="height h of the ground under the next touchdown (rough terrain: changes per step)",
         source="level ground",
-        low=-10.0,
-        high=10.0,
-    )
+    )  # fmt: skip
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:

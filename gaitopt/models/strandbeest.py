@@ -364,23 +364,15 @@ class Strandbeest(HybridModel):
         doc="ground slope γ (downhill positive, towards −x)",
     )
     torque: float = parameter(
-        0.0,
-        unit="N*m",
-        doc="constant crank torque τ (driving the crank forward)",
-        source="passive by default",
-        low=-1000.0,
-        high=1000.0,
-    )
+        0.0, unit="N*m", low=-1000.0, high=1000.0,
+        doc="constant crank torque τ (driving the crank forward)", source="passive by default",
+    )  # fmt: skip
     gravity: float = gravity_parameter()
     density: float = parameter(
-        _DENSITY,
-        unit="kg/m",
+        _DENSITY, unit="kg/m", low=0.0, high=100.0, low_open=True,
         doc="linear density of the links (uniform rods)",
         source="Deits' PVC pipe, Drake examples/multibody/strandbeest (0.476212462 kg/m)",
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+    )  # fmt: skip
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:

@@ -257,52 +257,27 @@ class ThreeLinkWalker(HybridModel):
     torso_length: float = _length(0.5, "hip to torso mass distance L")
     gravity: float = gravity_parameter(_GRIZZLE, default=9.8)
     omega_n: float = parameter(
-        5.0,
-        unit="rad/s",
-        doc="natural frequency ω_n of the output dynamics ḧ + 2ζω_n ḣ + ω_n² h = 0",
-        source=_GAINS,
-        low=0.0,
-        high=1000.0,
-        low_open=True,
-    )
+        5.0, unit="rad/s", low=0.0, high=1000.0, low_open=True,
+        doc="natural frequency ω_n of the output dynamics ḧ + 2ζω_n ḣ + ω_n² h = 0", source=_GAINS,
+    )  # fmt: skip
     zeta: float = parameter(
-        1.1,
-        unit="1",
-        doc="damping ratio ζ of the output dynamics",
-        source=_GAINS,
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+        1.1, unit="1", low=0.0, high=100.0, low_open=True,
+        doc="damping ratio ζ of the output dynamics", source=_GAINS,
+    )  # fmt: skip
     torso_angle: float = parameter(
-        math.pi / 8,
-        unit="rad",
-        doc="torso angle θ3d held by the first virtual constraint h1 = θ3 − θ3d",
-        source=_GRIZZLE,
-        low=-math.pi / 2,
-        high=math.pi / 2,
-        low_open=True,
-        high_open=True,
-    )
+        math.pi / 8, unit="rad", low=-math.pi / 2, high=math.pi / 2, low_open=True, high_open=True,
+        doc="torso angle θ3d held by the first virtual constraint h1 = θ3 − θ3d", source=_GRIZZLE,
+    )  # fmt: skip
     swing_offset: float = parameter(
-        0.0,
-        unit="rad",
+        0.0, unit="rad", low=-0.5, high=0.5,
         doc="offset δ of the second virtual constraint h2 = θ1 + θ2 − δ (0: the swing leg "
         "mirrors the stance leg)",
         source=_GRIZZLE,
-        low=-0.5,
-        high=0.5,
-    )
+    )  # fmt: skip
     impact_angle: float = parameter(
-        math.pi / 8,
-        unit="rad",
-        doc="stance-leg angle θ_i at the impact (θ1 = θ_i rising ends the step)",
-        source=_GRIZZLE,
-        low=0.0,
-        high=math.pi / 2,
-        low_open=True,
-        high_open=True,
-    )
+        math.pi / 8, unit="rad", low=0.0, high=math.pi / 2, low_open=True, high_open=True,
+        doc="stance-leg angle θ_i at the impact (θ1 = θ_i rising ends the step)", source=_GRIZZLE,
+    )  # fmt: skip
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:

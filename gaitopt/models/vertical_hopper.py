@@ -112,22 +112,15 @@ class VerticalHopper(HybridModel):
         4000.0, "leg spring stiffness k", _CHOSEN + " (k = m·20²)", high=1e8
     )
     damping: float = parameter(
-        0.0,
-        unit="N·s/m",
+        0.0, unit="N·s/m", low=0.0, high=1e5,
         doc="leg damping b in stance (optional loss; the closed forms assume 0)",
         source="ideal spring; Raibert's leg friction is lumped into touchdown_loss",
-        low=0.0,
-        high=1e5,
-    )
+    )  # fmt: skip
     touchdown_loss: float = parameter(
-        0.1,
-        unit="1",
+        0.1, unit="1", low=0.0, high=1.0, high_open=True,
         doc="fraction ε of the kinetic energy lost at touchdown (ẏ⁺ = sqrt(1 − ε) ẏ⁻)",
         source=_RAIBERT + " (unsprung leg mass ≈ 10 % of the body's)",
-        low=0.0,
-        high=1.0,
-        high_open=True,
-    )
+    )  # fmt: skip
     desired_height: float = length_parameter(
         0.7,
         "desired apex height h_d of the body (E_d = m g h_d)",
@@ -135,14 +128,10 @@ class VerticalHopper(HybridModel):
         high=100.0,
     )
     gain: float = parameter(
-        0.5,
-        unit="1",
+        0.5, unit="1", low=0.0, high=4.0, low_open=True,
         doc="energy-feedback gain K: W = (E_a − E_b) + K (E_d − E_a)",
         source="inside the stable range (0, 2); P'(h_d) = 1 − K = 0.5",
-        low=0.0,
-        high=4.0,
-        low_open=True,  # K = 0: every apex height is a fixed point (the map is the identity)
-    )
+    )  # fmt: skip
     gravity: float = gravity_parameter()
 
     @classmethod
