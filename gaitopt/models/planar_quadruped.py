@@ -122,6 +122,16 @@ def _drawing(sym: Symbols, x: ca.SX, hips, l0: ca.SX, feet) -> ca.Function:
     return ca.Function("points", [x, sym.p], [ca.horzcat(*cols)])
 
 
+def _energy():
+    """The total energy ``E`` (J) of the passive bound and pronk, a parameter."""
+    return energy_parameter(
+        90.0,
+        "total energy E (kinetic + m g z + spring)",
+        "chosen: E/(m g) = 0.44 m, above the touchdown height l0·cos θ ≈ 0.31 m; "
+        "a passive gait exists there (tests/test_planar_quadruped.py)",
+    )
+
+
 def _touchdown_angle(leg: str):
     """The nominal touchdown angle of the ``leg`` ("back", "front") as a parameter (rad)."""
     return parameter(
@@ -395,14 +405,7 @@ class PlanarQuadruped(_QuadrupedBase):
 
     back_touchdown_angle: float = _touchdown_angle("back")
     front_touchdown_angle: float = _touchdown_angle("front")
-    energy: float = energy_parameter(
-        90.0,
-        "total energy E (kinetic + m g z + spring)",
-        (
-            "chosen: E/(m g) = 0.44 m, above the touchdown height l0·cos θ ≈ 0.31 m; "
-            "a passive gait exists there (tests/test_planar_quadruped.py)"
-        ),
-    )
+    energy: float = _energy()
 
     def _touchdown_heights(self):
         return [
@@ -505,14 +508,7 @@ class PlanarQuadrupedPronk(_QuadrupedBase):
         source="chosen: a passive pronk exists there "
         "(the SLIP(2k) gait, tests/test_planar_quadruped.py)",
     )  # fmt: skip
-    energy: float = energy_parameter(
-        90.0,
-        "total energy E (kinetic + m g z + spring)",
-        (
-            "chosen: E/(m g) = 0.44 m, above the touchdown height l0·cos θ ≈ 0.31 m; "
-            "a passive gait exists there (tests/test_planar_quadruped.py)"
-        ),
-    )
+    energy: float = _energy()
 
     def _touchdown_heights(self):
         return [self.rest_length * math.cos(self.touchdown_angle)]

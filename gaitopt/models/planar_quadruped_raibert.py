@@ -193,6 +193,16 @@ class _Legs:
             source="the gait's phase sequence (Poulakakis et al. 2006, Fig. 2)",
         )
 
+    def apex(self, x):
+        """The top of the flight, ``ż = 0`` falling; ``x`` is measured from there on."""
+        return apex(
+            self.sym,
+            x,
+            x[4],  # ż = 0, falling
+            ca.vertcat(0, x[1:6]),  # x measured from the apex
+            doc="top of the flight, ż = 0 falling; x is measured from here on",
+        )
+
     def falls(self, x, hips, doc):
         return fall(
             self.sym, x, "falls (a hip reaches the ground)", ca.fmin(hips[0][1], hips[1][1]), doc
@@ -369,14 +379,7 @@ class PlanarQuadrupedRaibert(_QuadrupedBase):
             ),
         )
         xa = _flight()
-        top = apex(
-            sym,
-            xa,
-            xa[4],  # ż = 0, falling
-            ca.vertcat(0, xa[1:6]),  # x measured from the apex
-            doc="top of the flight, ż = 0 falling; x is measured from here on",
-        )
-        ascent = flight_phase("ascent", xa, top)
+        ascent = flight_phase("ascent", xa, legs.apex(xa))
         s = ca.SX.sym("s", 4)
         section = Section(
             ("z", "phi", "x_dot", "phi_dot"),

@@ -27,7 +27,6 @@ from dataclasses import dataclass
 import casadi as ca
 
 from ..hybrid import Phase, Section, Symbols, Transition
-from .blocks import apex
 from .planar_quadruped import _FLIGHT
 from .planar_quadruped_raibert import _NAMES, _RAIBERT, PlanarQuadrupedRaibert, _Legs
 from .raibert_hopper import speed_gain_parameter
@@ -127,13 +126,7 @@ class PlanarQuadrupedRaibertPronk(PlanarQuadrupedRaibert):
         # 2 ascent → apex
         xa = Symbols.states(*_FLIGHT)[0]
         back, front = legs.hips(xa)
-        top = apex(
-            sym,
-            xa,
-            xa[4],  # ż = 0, falling
-            ca.vertcat(0, xa[1:6]),  # x measured from the apex
-            doc="top of the flight, ż = 0 falling; x is measured from here on",
-        )
+        top = legs.apex(xa)
         ascent = Phase(
             "ascent",
             _FLIGHT,

@@ -139,9 +139,9 @@ def _unit(angle: ca.SX) -> ca.SX:
     return ca.vertcat(ca.sin(angle), ca.cos(angle))
 
 
-def _terms(sym: Symbols, q: ca.SX, qd: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
-    """``D(q)`` (kg·m²), ``C(q, q̇)`` (kg·m²/s) and ``G(q)`` (N·m) of Grizzle et al. 2001."""
-    r, m, mh, mt, ell, g = (
+def _grizzle(sym: Symbols) -> tuple[ca.SX, ...]:
+    """Grizzle et al. 2001's ``r, m, M_H, M_T, l, g`` (m, kg, kg, kg, m, m/s²)."""
+    return (
         sym.leg_length,
         sym.mass_leg,
         sym.mass_hip,
@@ -149,6 +149,11 @@ def _terms(sym: Symbols, q: ca.SX, qd: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
         sym.torso_length,
         sym.gravity,
     )
+
+
+def _terms(sym: Symbols, q: ca.SX, qd: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
+    """``D(q)`` (kg·m²), ``C(q, q̇)`` (kg·m²/s) and ``G(q)`` (N·m) of Grizzle et al. 2001."""
+    r, m, mh, mt, ell, g = _grizzle(sym)
     c12, c13 = ca.cos(q[0] - q[1]), ca.cos(q[0] - q[2])
     s12, s13 = ca.sin(q[0] - q[1]), ca.sin(q[0] - q[2])
     D = ca.SX(3, 3)
@@ -473,14 +478,7 @@ def _functions(sym, x, q, qd, loop, geo, post) -> dict[str, ca.Function]:
     """Numeric functions of the closed loop (torques, outputs, energy, power, impact)."""
     D, G = loop["D"], loop["G"]
     del G
-    r, m, mh, mt, ell, g = (
-        sym.leg_length,
-        sym.mass_leg,
-        sym.mass_hip,
-        sym.mass_torso,
-        sym.torso_length,
-        sym.gravity,
-    )
+    r, m, mh, mt, ell, g = _grizzle(sym)
     # V with ∂V/∂q = G (Grizzle et al. 2001's G is the gradient of this potential).
     V = (mh + mt + 3 * m / 2) * g * r * ca.cos(q[0]) - (m * g * r / 2) * ca.cos(q[1])
     V = V + mt * g * ell * ca.cos(q[2])
