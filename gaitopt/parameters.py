@@ -78,14 +78,8 @@ class ParameterSpec:
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready description (``gaitopt list --json``)."""
-        return {
-            "name": self.name,
-            "unit": self.unit,
-            "default": self.default,
-            "doc": self.doc,
-            "source": self.source,
-            "range": self.range_text(),
-        }
+        fields = ("name", "unit", "default", "doc", "source")
+        return {**{key: getattr(self, key) for key in fields}, "range": self.range_text()}
 
 
 def _fmt(x: float) -> str:
@@ -111,19 +105,15 @@ def parameter(
     return dataclasses.field(default=default, metadata={"gaitopt": spec})
 
 
-def gravity_parameter(source: str = "standard gravity") -> Any:
+def gravity_parameter(source: str = "standard gravity", default: float = STANDARD_GRAVITY) -> Any:
     """The gravitational acceleration ``g`` (m/s², default :data:`STANDARD_GRAVITY`, range
     (0, 100]) as a model parameter: every model with gravity declares it with this, so that its
-    name, unit, default and range are the same in each.  ``source``: where the model's default
-    comes from, if not simply standard gravity (the five-link biped: OptimTraj's value)."""
+    name, unit and range are the same in each.  ``source``: where the model's default comes
+    from, if not simply standard gravity (the five-link biped: OptimTraj's value); ``default``:
+    a paper's own rounding (Grizzle's 9.8 for the three-link walker)."""
+    doc = "gravitational acceleration g"
     return parameter(
-        STANDARD_GRAVITY,
-        unit="m/s^2",
-        doc="gravitational acceleration g",
-        source=source,
-        low=0.0,
-        high=100.0,
-        low_open=True,
+        default, unit="m/s^2", doc=doc, source=source, low=0.0, high=100.0, low_open=True
     )
 
 

@@ -82,6 +82,23 @@ class MapFixedPoints:
         return np.array([c.section_point[0] for c in self.cycles])
 
 
+def one_dimensional(
+    model: HybridModel, interval: Sequence[float], what: str
+) -> tuple[float, float]:
+    """``interval`` as floats ``(lo, hi)`` on the model's one section coordinate; a
+    :class:`GaitoptInputError` starting with ``what`` (e.g. "fixed_points_1d needs") if the
+    section is not one-dimensional, or if the interval is not increasing."""
+    if len(model.section.coordinates) != 1:
+        raise GaitoptInputError(
+            f"{model.name}: {what} a 1-D section; this one has coordinates "
+            f"{', '.join(model.section.coordinates)}"
+        )
+    lo, hi = map(float, interval)
+    if not lo < hi:
+        raise GaitoptInputError(f"`interval` must be increasing, got {interval!r}")
+    return lo, hi
+
+
 def fixed_points_1d(
     model: HybridModel,
     interval: tuple[float, float],
@@ -100,14 +117,7 @@ def fixed_points_1d(
     GaitoptInputError
         If the model's section is not one-dimensional or the interval is empty.
     """
-    if len(model.section.coordinates) != 1:
-        raise GaitoptInputError(
-            f"{model.name}: fixed_points_1d needs a 1-D section; this one has coordinates "
-            f"{', '.join(model.section.coordinates)}"
-        )
-    lo, hi = map(float, interval)
-    if not lo < hi:
-        raise GaitoptInputError(f"`interval` must be increasing, got {interval!r}")
+    lo, hi = one_dimensional(model, interval, "fixed_points_1d needs")
     grid = np.linspace(lo, hi, samples)
     values = np.array([return_map(model, [v], inputs=inputs)[0] for v in grid])
     d = values - grid

@@ -25,7 +25,8 @@ from .common import (
     EXIT_NOT_FOUND,
     EXIT_OK,
     InputError,
-    _count,
+    _count_option,
+    _items_option,
     _model_arguments,
     _scheduler_address,
     build_model,
@@ -51,33 +52,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     from ..basin import _LIMIT, MAX_RAYS, MAX_SAMPLES, MAX_STEPS
 
     _model_arguments(parser)
-    parser.add_argument(
-        "--guess",
-        action="append",
-        metavar="STATE=VALUE",
-        help="initial guess of a section coordinate for the gait (repeatable)",
+    _items_option(
+        parser, "--guess", "initial guess of a section coordinate for the gait (repeatable)"
     )
-    parser.add_argument(
-        "--rays",
-        type=_count(1, MAX_RAYS, _LIMIT),
-        default=16,
-        metavar="N",
-        help=f"rays from the fixed point (default 16, at most {MAX_RAYS})",
-    )
-    parser.add_argument(
+    _count_option(parser, "--rays", 16, (1, MAX_RAYS, _LIMIT), "rays from the fixed point")
+    _count_option(
+        parser,
         "--steps",
-        type=_count(1, MAX_STEPS, _LIMIT),
-        default=40,
-        metavar="N",
-        help=f"periods within which a start must reach the fixed point (default 40, at most "
-        f"{MAX_STEPS})",
+        40,
+        (1, MAX_STEPS, _LIMIT),
+        "periods within which a start must reach the fixed point",
     )
-    parser.add_argument(
-        "--samples",
-        type=_count(1, MAX_SAMPLES, _LIMIT),
-        default=100,
-        metavar="N",
-        help=f"random starts of the volume fraction (default 100, at most {MAX_SAMPLES})",
+    _count_option(
+        parser, "--samples", 100, (1, MAX_SAMPLES, _LIMIT), "random starts of the volume fraction"
     )
     parser.add_argument(
         "--max-radius",
@@ -169,21 +156,10 @@ def run(args: argparse.Namespace) -> int:
             print_header(gait)
         return EXIT_NOT_FOUND
     try:
-        estimate = basin(
-            gait,
-            rays=args.rays,
-            steps=args.steps,
-            max_radius=args.max_radius,
-            scheduler=args.scheduler,
-        )
+        shared = {"steps": args.steps, "scheduler": args.scheduler}
+        estimate = basin(gait, rays=args.rays, max_radius=args.max_radius, **shared)
         rayed = time.perf_counter()
-        fraction = basin_fraction(
-            gait,
-            samples=args.samples,
-            steps=args.steps,
-            window=args.max_radius,
-            scheduler=args.scheduler,
-        )
+        fraction = basin_fraction(gait, samples=args.samples, window=args.max_radius, **shared)
     except OSError as exc:  # a Dask scheduler that cannot be reached
         raise InputError(f"--scheduler {args.scheduler}: cannot reach it ({exc})") from None
     done = time.perf_counter()

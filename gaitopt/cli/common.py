@@ -4,7 +4,6 @@ parameters, states and shared arguments (printing and ``--out``: :mod:`gaitopt.c
 from __future__ import annotations
 
 import argparse
-import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, NoReturn
@@ -91,6 +90,35 @@ def _count(minimum: int, maximum: int | None = None, why: str = "") -> Callable[
     return parse
 
 
+def _count_option(
+    parser: argparse.ArgumentParser,
+    flag: str,
+    default: int,
+    limits: tuple[int, int, str],
+    help: str,
+    metavar: str = "N",
+) -> None:
+    """Declare ``flag N``: a whole number within ``limits = (minimum, maximum, why)`` (see
+    :func:`_count`), with ``(default D, at most M)`` appended to ``help`` (``(default D; m to
+    M)`` when the minimum is not 1)."""
+    low, high, why = limits
+    span = f"at most {high}" if low == 1 else f"{low} to {high}"
+    parser.add_argument(
+        flag,
+        type=_count(low, high, why),
+        default=default,
+        metavar=metavar,
+        help=f"{help} (default {default}{', ' if low == 1 else '; '}{span})",
+    )
+
+
+def _items_option(
+    parser: argparse.ArgumentParser, flag: str, help: str, metavar: str = "STATE=VALUE"
+) -> None:
+    """Declare a repeatable ``flag NAME=VALUE`` (a list of the items given, or None)."""
+    parser.add_argument(flag, action="append", metavar=metavar, help=help)
+
+
 def _scheduler_address(text: str) -> str:
     """An argparse ``type`` for ``--scheduler``: ``local`` or a Dask address with its port
     (``tcp://10.0.0.5:8786``, ``10.0.0.5:8786``)."""
@@ -119,15 +147,18 @@ def _split(option: str, item: str, examples: Mapping[str, str]) -> tuple[str, st
     return name, text
 
 
-def _number(option: str, item: str, text: str, example: str) -> float:
-    """A finite float from ``text`` (``0.09``, ``1e-2``), or an :class:`InputError`."""
+def _number(
+    option: str, item: str, text: str, example: str, parse: Callable[[str], Any] = float
+) -> Any:
+    """A finite number ``parse(text)`` (a float by default: ``0.09``, ``1e-2``), or an
+    :class:`InputError` naming ``option item`` with the ``example``."""
     try:
-        value = float(text)
+        value = parse(text)
     except ValueError:
         raise InputError(
             f"{option} {item}: {text!r} is not a number; e.g. {option} {example}"
         ) from None
-    if not math.isfinite(value):
+    if not np.isfinite(value):
         raise InputError(f"{option} {item}: {text!r} is not finite; e.g. {option} {example}")
     return value
 
@@ -168,14 +199,20 @@ def _model_class(name: str) -> type[HybridModel]:
         raise InputError(f"MODEL {name}: {exc}") from None
 
 
-def _parameter(model_name: str, specs: Mapping[str, ParameterSpec], item: str) -> tuple[str, float]:
-    """One ``--set NAME=VALUE``: a known parameter, a number, in its range."""
+def _parameter(
+    model_name: str,
+    specs: Mapping[str, ParameterSpec],
+    item: str,
+    listing: str = "parameters: {} (see `" + PROG + " list`)",
+) -> tuple[str, float]:
+    """One ``--set NAME=VALUE``: a known parameter, a number, in its range; ``listing`` (with
+    ``{}`` for the names) ends the message for an unknown name."""
     examples = {name: f"{name}={spec.default:g}" for name, spec in specs.items()}
     name, text = _split("--set", item, examples)
     if name not in specs:
         raise InputError(
             f"--set {item}: {model_name} has no parameter {name!r}; "
-            f"{did_you_mean(name, specs)}parameters: {', '.join(specs)} (see `{PROG} list`)"
+            f"{did_you_mean(name, specs)}{listing.format(', '.join(specs))}"
         )
     value = _number("--set", item, text, examples[name])
     try:
@@ -280,46 +317,35 @@ def _check_point(
 def _model_arguments(parser: argparse.ArgumentParser) -> None:
     """``MODEL`` and ``--set``, shared by the subcommands that act on one model."""
     parser.add_argument("model", metavar="MODEL", help=f"model name (see `{PROG} list`)")
-    parser.add_argument(
-        "--set",
-        action="append",
-        metavar="NAME=VALUE",
-        help="change a parameter from its default (repeatable)",
+    _items_option(
+        parser, "--set", "change a parameter from its default (repeatable)", metavar="NAME=VALUE"
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
 
 
 def _gait_arguments(parser: argparse.ArgumentParser) -> None:
     """``--guess`` and ``--steps``: which gait to find (shared by ``solve`` and ``continue``)."""
-    parser.add_argument(
+    _items_option(
+        parser,
         "--guess",
-        action="append",
-        metavar="STATE=VALUE",
-        help="initial guess of a section coordinate (repeatable; others from the default start)",
+        "initial guess of a section coordinate (repeatable; others from the default start)",
     )
-    parser.add_argument(
+    _count_option(
+        parser,
         "--steps",
-        type=_count(1, MAX_ORBIT_STEPS, _ORBIT_LIMIT),
-        default=1,
+        1,
+        (1, MAX_ORBIT_STEPS, _ORBIT_LIMIT),
+        "returns to the section per orbit, 2 for a period-2 gait",
         metavar="K",
-        help=f"returns to the section per orbit (2: a period-2 gait; default 1, at most "
-        f"{MAX_ORBIT_STEPS})",
     )
 
 
 def _numbers(option: str, text: str | None, kind: type = float) -> list | None:
-    """``--q 1,2,3``: a list of finite numbers (``None`` if the option is absent)."""
+    """``--q 1,2,3``: a list of finite numbers (``None`` if the option is absent); ``kind``
+    ``complex`` reads ``1+2i`` as ``1+2j``."""
     if text is None:
         return None
-    values = []
-    for part in text.split(","):
-        try:
-            value = kind(part.strip().replace("i", "j"))
-        except ValueError:
-            raise InputError(
-                f"{option} {text}: {part.strip()!r} is not a number; e.g. {option} 1,0.5"
-            ) from None
-        if not np.isfinite(value):
-            raise InputError(f"{option} {text}: {part.strip()!r} is not finite")
-        values.append(value)
-    return values
+    return [
+        _number(option, text, part.strip(), "1,0.5", lambda t: kind(t.replace("i", "j")))
+        for part in text.split(",")
+    ]

@@ -20,7 +20,8 @@ import sys
 from pathlib import Path
 
 from ..curves import CURVE_KINDS, Curve, bifurcation_curve
-from ..errors import GuessError, ParameterError, did_you_mean
+from ..curves.paths import ParameterPath
+from ..errors import GuessError, ParameterError
 from ..parameters import check_parameter
 from .common import (
     EXIT_BAD_INPUT,
@@ -83,16 +84,10 @@ def run_curve(args: argparse.Namespace) -> int:
     model = build_model(args.model, args.set)
     specs = {s.name: s for s in model.parameter_specs()}
     for option, name in (("--param", args.param), ("--param2", args.param2)):
-        if name not in specs:
-            raise InputError(
-                f"{option} {name}: {model.name} has no parameter {name!r}; "
-                f"{did_you_mean(name, specs)}parameters: {', '.join(specs)}"
-            )
-        if specs[name].integer:
-            raise InputError(
-                f"{option} {name}: `{name}` takes integer values and cannot be continued; "
-                f"choose a real parameter"
-            )
+        try:
+            ParameterPath.of(model, name)  # a known, real-valued parameter
+        except ParameterError as exc:
+            raise InputError(f"{option} {name}: {exc}; choose a real parameter") from None
     if args.param2 == args.param:
         raise InputError(
             f"--param2 {args.param2}: must differ from --param {args.param}; choose another "

@@ -23,7 +23,6 @@ from typing import Any
 from ..errors import ParameterError, did_you_mean
 from ..linkage import LINKAGES
 from ..linkage.jansen import MAX_SAMPLES, SAMPLES_LIMIT
-from ..parameters import check_parameter
 
 __all__ = ["HELP", "add_arguments", "run", "describe"]
 
@@ -33,20 +32,20 @@ HELP = "kinematics of a leg linkage (Jansen's Strandbeest): foot path, ground co
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Declare ``LINKAGE``, ``--set``, ``--samples`` and ``--json``."""
     parser.add_argument("linkage", metavar="LINKAGE", help=f"one of: {', '.join(LINKAGES)}")
-    parser.add_argument(
-        "--set",
-        action="append",
-        metavar="NAME=VALUE",
-        help="change a length (m), e.g. --set j=0.52 (repeatable; see `gaitopt linkage jansen`)",
-    )
-    from .common import _count
+    from .common import _count_option, _items_option
 
-    parser.add_argument(
+    _items_option(
+        parser,
+        "--set",
+        "change a length (m), e.g. --set j=0.52 (repeatable; see `gaitopt linkage jansen`)",
+        metavar="NAME=VALUE",
+    )
+    _count_option(
+        parser,
         "--samples",
-        type=_count(16, MAX_SAMPLES, SAMPLES_LIMIT),
-        default=720,
-        metavar="N",
-        help=f"crank steps per turn of the continuation (default 720; 16 to {MAX_SAMPLES})",
+        720,
+        (16, MAX_SAMPLES, SAMPLES_LIMIT),
+        "crank steps per turn of the continuation",
     )
     parser.add_argument("--json", action="store_true", help="print one JSON object")
 
@@ -59,7 +58,7 @@ def describe(name: str, settings: list[str] | None, samples: int) -> dict[str, A
     gaitopt.cli.InputError
         For bad input, on one line naming the argument.
     """
-    from .common import InputError, _echo, _number, _split
+    from .common import InputError, _echo, _parameter
 
     if name not in LINKAGES:
         raise InputError(
@@ -70,20 +69,8 @@ def describe(name: str, settings: list[str] | None, samples: int) -> dict[str, A
         raise InputError(f"--samples {samples}: expected an integer >= 16, e.g. --samples 720")
     cls = LINKAGES[name]
     specs = {spec.name: spec for spec in cls.parameter_specs()}
-    examples = {n: f"{n}={spec.default:g}" for n, spec in specs.items()}
-    lengths = {}
-    for item in settings or ():
-        key, text = _split("--set", item, examples)
-        if key not in specs:
-            raise InputError(
-                f"--set {item}: {name} has no parameter {key!r}; {did_you_mean(key, specs)}"
-                f"parameters (lengths, m): {', '.join(specs)}"
-            )
-        value = _number("--set", item, text, examples[key])
-        try:
-            lengths[key] = check_parameter(name, specs[key], value)
-        except ParameterError as exc:
-            raise InputError(f"--set {item}: {exc}") from None
+    listing = "parameters (lengths, m): {}"
+    lengths = dict(_parameter(name, specs, item, listing) for item in settings or ())
     try:
         numbers = cls(**lengths).numbers(samples)
     except ParameterError as exc:  # the leg cannot be assembled through a whole turn

@@ -21,7 +21,8 @@ from .common import (
     PROG,
     InputError,
     _check_point,
-    _count,
+    _count_option,
+    _items_option,
     _model_arguments,
     build_model,
     parse_guess,
@@ -33,19 +34,18 @@ from .output import _format_params, _print_json, _print_rows, _solver_output_to_
 # -- gaitopt simulate ----------------------------------------------------------------------------
 def _simulate_arguments(parser: argparse.ArgumentParser) -> None:
     _model_arguments(parser)
-    parser.add_argument(
+    _items_option(
+        parser,
         "--x0",
-        action="append",
-        metavar="STATE=VALUE",
-        help="start state (repeatable): section coordinates (others from the default start), "
+        "start state (repeatable): section coordinates (others from the default start), "
         "or every state",
     )
-    parser.add_argument(
+    _count_option(
+        parser,
         "--steps",
-        type=_count(1, MAX_SIMULATION_STEPS, _SIMULATION_LIMIT),
-        default=10,
-        metavar="N",
-        help=f"returns to the section to simulate (default 10, at most {MAX_SIMULATION_STEPS})",
+        10,
+        (1, MAX_SIMULATION_STEPS, _SIMULATION_LIMIT),
+        "returns to the section to simulate",
     )
     parser.add_argument(
         "--controller",
@@ -53,11 +53,10 @@ def _simulate_arguments(parser: argparse.ArgumentParser) -> None:
         help="step-to-step controller around the model's gait (default: open loop at the "
         "nominal input); blind: the SLIP's swing-leg law, deadbeat on unknown ground",
     )
-    parser.add_argument(
+    _items_option(
+        parser,
         "--target",
-        action="append",
-        metavar="STATE=VALUE",
-        help="with --controller: drive to this section point instead of the gait's fixed point "
+        "with --controller: drive to this section point instead of the gait's fixed point "
         "(e.g. slip: --target z=1.0)",
     )
     parser.add_argument(

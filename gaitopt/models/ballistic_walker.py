@@ -45,6 +45,7 @@ import numpy as np
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..mechanics import kinetic_energy, lagrange_acceleration, potential_energy, rigid_link
 from ..parameters import gravity_parameter, parameter
+from .quantities import state_units
 
 __all__ = ["BallisticWalker", "Swing"]
 
@@ -107,14 +108,7 @@ class BallisticWalker(HybridModel):
     )
     title = "Ballistic walker (swing phase)"
     reference = "Mochon & McMahon 1980, J. Biomech. 13:49–57"
-    state_units = {
-        "stance": "rad",
-        "thigh": "rad",
-        "shank": "rad",
-        "stance_dot": "rad/s",
-        "thigh_dot": "rad/s",
-        "shank_dot": "rad/s",
-    }
+    state_units = state_units(stance="rad", thigh="rad", shank="rad")
     drawing = (("stance_foot", "hip", "knee", "swing_foot"),)
     passive_gait = False
     mesh = (6, 6)

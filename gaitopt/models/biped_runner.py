@@ -72,13 +72,13 @@ import numpy as np
 from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
-from .blocks import ballistic_flow, fall, hip_about_foot, leg_touchdown
+from .blocks import ballistic_flow, fall, leg_touchdown
+from .polar import FLIGHT, UNITS, leg_in_flight, spring_stance
+from .quantities import energy_parameter, length_parameter, mass_parameter, stiffness_parameter
 
 __all__ = ["BipedRunner", "classify"]
 
 _TEDRAKE = "Tedrake, Underactuated Robotics, SLIP apex map (after Geyer 2005)"
-_FLIGHT = ("x", "z", "x_dot", "z_dot")
-_STANCE = ("r", "theta", "r_dot", "theta_dot")
 #: Threshold of :func:`classify`: a stride whose shorter aerial phase is below this fraction of
 #: the longer one is a skip (our choice; see the module docstring).
 SKIP_RATIO = 0.5
@@ -93,22 +93,9 @@ def _step(sym: Symbols, leg: str, first: int) -> tuple[Phase, Phase, Phase]:
     drawn = getattr(sym, f"touchdown_angle_{leg}")  # drawing functions take (x, p) only
     L = leg.upper()
 
-    xf, (x, z, x_dot, z_dot) = sym.states(*_FLIGHT)
+    xf, (x, z, x_dot, z_dot) = sym.states(*FLIGHT)
     ballistic = ballistic_flow(sym, xf, g, vertical=1)  # ẍ = 0, z̈ = −g
     flight_energy = sym.conserved("energy", xf, 0.5 * m * (x_dot**2 + z_dot**2) + m * g * z)
-
-    def flight_points():
-        return ca.Function(
-            "points",
-            [xf, sym.p],
-            [
-                ca.horzcat(
-                    ca.vertcat(x, z),
-                    ca.vertcat(x + l0 * ca.sin(drawn), z - l0 * ca.cos(drawn)),
-                    ca.vertcat(x, 0),
-                )
-            ],
-        )
 
     # -- descent: touchdown at z − l cos θ = 0 falling (the SLIP's, blocks.leg_touchdown) -------
     touchdown = leg_touchdown(
@@ -125,7 +112,7 @@ def _step(sym: Symbols, leg: str, first: int) -> tuple[Phase, Phase, Phase]:
     touchdown = replace(touchdown, name=f"touchdown {L}", target=first + 1)
     descent = Phase(
         f"descent {L}",
-        _FLIGHT,
+        FLIGHT,
         ballistic,
         (
             touchdown,
@@ -138,84 +125,12 @@ def _step(sym: Symbols, leg: str, first: int) -> tuple[Phase, Phase, Phase]:
             ),
         ),
         {"energy": flight_energy},
-        points=flight_points(),
+        points=leg_in_flight(sym, xf, l0, drawn),
         point_names=("hip", "foot", "origin"),
     )
 
     # -- stance: the SLIP's polar equations about the foot (module docstring) -------------------
-    xs, (r, th, r_dot, th_dot) = sym.states(*_STANCE)
-    flow = sym.function(
-        "flow",
-        xs,
-        ca.vertcat(
-            r_dot,
-            th_dot,
-            r * th_dot**2 - g * ca.cos(th) + k / m * (l0 - r),
-            (g * ca.sin(th) - 2 * r_dot * th_dot) / r,
-        ),
-    )
-    hip_x, hip_z, hip_xd, hip_zd = hip_about_foot(r, th, r_dot, th_dot)
-    liftoff = Transition(
-        name=f"liftoff {L}",
-        guard=sym.function("guard", xs, r - l0),  # r = l, extending
-        direction=+1,
-        reset=sym.function("reset", xs, ca.vertcat(hip_x, hip_z, hip_xd, hip_zd)),
-        target=first + 2,
-        admissible=sym.function("admissible", xs, hip_xd),  # moving forwards
-        impact=False,
-        doc=f"leg {L} regains its rest length, r = l_{leg}, extending, moving forwards; "
-        f"Cartesian flight state with x from foot {L}",
-    )
-    stance = Phase(
-        f"stance {L}",
-        _STANCE,
-        flow,
-        (
-            liftoff,
-            fall(
-                sym,
-                xs,
-                f"falls back (lifts off leg {L} moving backwards)",
-                r - l0,
-                "lift-off with the hip moving backwards: too little forward energy",
-                direction=+1,
-                admissible=-hip_xd,
-            ),
-            fall(
-                sym,
-                xs,
-                f"falls back (leg {L} stops rotating)",
-                th_dot,
-                "θ̇ falls through 0 in stance: too little forward energy to vault over the foot",
-            ),
-            fall(sym, xs, "falls (hip reaches the ground in stance)", hip_z, "hip at foot level"),
-        ),
-        {
-            "energy": sym.conserved(
-                "energy",
-                xs,
-                0.5 * m * (r_dot**2 + r**2 * th_dot**2) + m * g * hip_z + 0.5 * k * (l0 - r) ** 2,
-            )
-        },
-        points=ca.Function(
-            "points", [xs, sym.p], [ca.horzcat(ca.vertcat(hip_x, hip_z), ca.DM.zeros(2, 1))]
-        ),
-        point_names=("hip", "foot"),
-        constraints=(
-            # The massless spring leg can only push: k (l − r) ≥ 0, zero at touchdown and
-            # lift-off (Blickhan 1989).
-            sym.constraint(
-                f"leg {L} force compressive",
-                xs,
-                k * (l0 - r),
-                f"leg {L} pulls",
-                at_start=True,
-                at_end=True,
-                unit="N",
-                source="a massless spring leg on the ground can only push (Blickhan 1989)",
-            ),
-        ),
-    )
+    stance = spring_stance(sym, stiffness=k, rest_length=l0, target=first + 2, leg=L)
 
     # -- ascent: up to the apex ż = 0 falling, x measured from there --------------------------
     nxt = (first + 3) % 6
@@ -231,7 +146,7 @@ def _step(sym: Symbols, leg: str, first: int) -> tuple[Phase, Phase, Phase]:
     )
     ascent = Phase(
         f"ascent {L}",
-        _FLIGHT,
+        FLIGHT,
         ballistic,
         (
             top,
@@ -244,17 +159,7 @@ def _step(sym: Symbols, leg: str, first: int) -> tuple[Phase, Phase, Phase]:
             ),
         ),
         {"energy": flight_energy},
-        points=ca.Function(
-            "points",
-            [xf, sym.p],
-            [
-                ca.horzcat(
-                    ca.vertcat(x, z),
-                    ca.vertcat(x + l0 * ca.sin(drawn), z - l0 * ca.cos(drawn)),
-                    ca.vertcat(x, 0),
-                )
-            ],
-        ),
+        points=leg_in_flight(sym, xf, l0, drawn),
         point_names=("hip", "foot", "below_hip"),
     )
     return descent, stance, ascent
@@ -263,35 +168,19 @@ def _step(sym: Symbols, leg: str, first: int) -> tuple[Phase, Phase, Phase]:
 def _leg_parameter(kind: str, leg: str):
     L = leg.upper()
     if kind == "stiffness":
-        return parameter(
+        return stiffness_parameter(
             8397.36,
-            unit="N/m",
-            doc=f"leg {L} stiffness k_{leg} (k̃ = k l/(m g) = 10.7 at the defaults)",
-            source=_TEDRAKE + ": k̃ = 10.7",
-            low=0.0,
-            high=1e7,
-            low_open=True,
+            f"leg {L} stiffness k_{leg} (k̃ = k l/(m g) = 10.7 at the defaults)",
+            _TEDRAKE + ": k̃ = 10.7",
         )
     if kind == "rest_length":
-        return parameter(
-            1.0,
-            unit="m",
-            doc=f"leg {L} rest length l_{leg}",
-            source=_TEDRAKE,
-            low=0.0,
-            high=10.0,
-            low_open=True,
-        )
+        return length_parameter(1.0, f"leg {L} rest length l_{leg}", _TEDRAKE)
     return parameter(
-        math.pi / 6,
-        unit="rad",
+        math.pi / 6, unit="rad", low=0.0, high=math.pi / 2, high_open=True,
         doc=f"nominal touchdown angle θ_{leg} of leg {L} from vertical (the per-step input's "
         f"default)",
         source=_TEDRAKE + ": 30°",
-        low=0.0,
-        high=math.pi / 2,
-        high_open=True,
-    )
+    )  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -307,22 +196,13 @@ class BipedRunner(HybridModel):
         "Raibert 1986 (Legged Robots That Balance, ch. 4); Blickhan 1989; "
         "Tedrake, Underactuated Robotics (SLIP); Merker et al. 2015"
     )
-    declared_states = _FLIGHT
+    declared_states = FLIGHT
     declared_coordinates = ("z",)
     declared_section_doc = (
         "apex before leg A's touchdown: z_dot = 0, x = 0, x_dot = sqrt(2 (energy/mass − gravity·z))"
     )
     drawing = (("hip", "foot"),)
-    state_units = {
-        "x": "m",
-        "z": "m",
-        "x_dot": "m/s",
-        "z_dot": "m/s",
-        "r": "m",
-        "theta": "rad",
-        "r_dot": "m/s",
-        "theta_dot": "rad/s",
-    }
+    state_units = UNITS
     inputs = ("touchdown_angle_a", "touchdown_angle_b")
     input_units = ("rad", "rad")
     input_bounds: ClassVar[dict[str, tuple[float, float]]] = {
@@ -333,9 +213,7 @@ class BipedRunner(HybridModel):
     #: A flight from an apex lasts at most sqrt(2 E/(m g²)) ≈ 0.6 s at the defaults.
     max_phase_time: ClassVar[float] = 5.0
 
-    mass: float = parameter(
-        80.0, unit="kg", doc="body mass m", source=_TEDRAKE, low=0.0, high=1e4, low_open=True
-    )
+    mass: float = mass_parameter(80.0, "body mass m", _TEDRAKE)
     stiffness_a: float = _leg_parameter("stiffness", "a")
     stiffness_b: float = _leg_parameter("stiffness", "b")
     rest_length_a: float = _leg_parameter("rest_length", "a")
@@ -343,14 +221,10 @@ class BipedRunner(HybridModel):
     touchdown_angle_a: float = _leg_parameter("angle", "a")
     touchdown_angle_b: float = _leg_parameter("angle", "b")
     gravity: float = gravity_parameter()
-    energy: float = parameter(
+    energy: float = energy_parameter(
         1263.528,
-        unit="J",
-        doc="total energy E = ½ m v² + m g z (Ẽ = E/(m g l) = 1.61 at the defaults)",
-        source=_TEDRAKE + ": Ẽ = 1.61",
-        low=0.0,
-        high=1e8,
-        low_open=True,
+        "total energy E = ½ m v² + m g z (Ẽ = E/(m g l) = 1.61 at the defaults)",
+        _TEDRAKE + ": Ẽ = 1.61",
     )
 
     @classmethod

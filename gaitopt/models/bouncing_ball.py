@@ -52,6 +52,7 @@ import numpy as np
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import bar_and_ball_points
+from .quantities import restitution_parameter
 
 __all__ = ["BouncingBall"]
 
@@ -81,34 +82,21 @@ class BouncingBall(HybridModel):
     #: A flight lasts a few table periods at most (0.2 s each at the defaults).
     max_phase_time: ClassVar[float] = 5.0
 
-    restitution: float = parameter(
+    restitution: float = restitution_parameter(
         0.5,
-        unit="1",
-        doc="coefficient of restitution e (relative velocity reversed and scaled by e)",
-        source="Guckenheimer & Holmes §2.4 figures use α = e = 0.5",
-        low=0.0,
-        high=1.0,
-        low_open=True,
-        high_open=True,
+        "coefficient of restitution e (relative velocity reversed and scaled by e)",
+        "Guckenheimer & Holmes §2.4 figures use α = e = 0.5",
     )
     acceleration: float = parameter(
-        1.2,
-        unit="1",
+        1.2, unit="1", low=0.0, high=20.0, low_open=True,
         doc="peak table acceleration relative to gravity Γ = A ω²/g",
         source="inside the period-1 stability window (1.047, 1.527) at e = 0.5",
-        low=0.0,
-        high=20.0,
-        low_open=True,
-    )
+    )  # fmt: skip
     frequency: float = parameter(
-        5.0,
-        unit="Hz",
+        5.0, unit="Hz", low=0.0, high=1e3, low_open=True,
         doc="table frequency f (ω = 2π f)",
         source="a slow paddle: flights of a few cm, table amplitude ≈ 1 cm·Γ",
-        low=0.0,
-        high=1e3,
-        low_open=True,
-    )
+    )  # fmt: skip
     gravity: float = gravity_parameter()
 
     @classmethod

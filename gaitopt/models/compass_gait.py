@@ -33,8 +33,9 @@ from ..mechanics import (
     lagrange_acceleration,
     potential_energy,
 )
-from ..parameters import gravity_parameter, parameter
+from ..parameters import gravity_parameter
 from .blocks import fall
+from .quantities import length_parameter, mass_parameter, slope_parameter, state_units
 
 __all__ = ["CompassGait"]
 
@@ -56,51 +57,19 @@ class CompassGait(HybridModel):
     declared_states = ("stance", "swing", "stance_dot", "swing_dot")
     declared_coordinates = ("stance", "stance_dot", "swing_dot")
     declared_section_doc = "just after heel strike: swing = 2·slope − stance"
-    state_units = {
-        "stance": "rad",
-        "swing": "rad",
-        "stance_dot": "rad/s",
-        "swing_dot": "rad/s",
-    }  # for axis labels
+    state_units = state_units(stance="rad", swing="rad")  # for axis labels
     title = "Compass gait"
     reference = "Goswami, Thuilot & Espiau 1996; Drake CompassGait"
     inputs = ("hip_torque",)
     input_units = ("N*m",)
     mesh = (4, 4)  # 16 RK8 steps per step: discretisation error ~1e-11
 
-    mass_hip: float = parameter(
-        10.0, unit="kg", doc="hip point mass m_h", source=_DRAKE, low=0.0, high=1e4, low_open=True
-    )
-    mass_leg: float = parameter(
-        5.0, unit="kg", doc="leg point mass m", source=_DRAKE, low=0.0, high=1e4, low_open=True
-    )
-    a: float = parameter(
-        0.5,
-        unit="m",
-        doc="foot to leg mass distance",
-        source=_DRAKE,
-        low=0.0,
-        high=10.0,
-        low_open=True,
-    )
-    b: float = parameter(
-        0.5,
-        unit="m",
-        doc="hip to leg mass distance",
-        source=_DRAKE,
-        low=0.0,
-        high=10.0,
-        low_open=True,
-    )
+    mass_hip: float = mass_parameter(10.0, "hip point mass m_h", _DRAKE)
+    mass_leg: float = mass_parameter(5.0, "leg point mass m", _DRAKE)
+    a: float = length_parameter(0.5, "foot to leg mass distance", _DRAKE)
+    b: float = length_parameter(0.5, "hip to leg mass distance", _DRAKE)
     gravity: float = gravity_parameter()
-    slope: float = parameter(
-        0.0525,
-        unit="rad",
-        doc="ground slope γ (downhill positive)",
-        source=_DRAKE,
-        low=0.0,
-        high=0.5,
-    )
+    slope: float = slope_parameter(0.0525, _DRAKE, (0.0, 0.5))
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:

@@ -117,6 +117,7 @@ from ..mechanics import (
 )
 from ..parameters import gravity_parameter, parameter
 from .blocks import fall
+from .quantities import length_parameter, mass_parameter, slope_parameter
 
 __all__ = ["FiveLinkBiped"]
 
@@ -144,7 +145,7 @@ INPUT_MATRIX = (
 
 def _mass(value: float, doc: str) -> Any:
     """A link mass (kg, in (0, 1e4]) from OptimTraj."""
-    return parameter(value, unit="kg", doc=doc, source=_OPTIMTRAJ, low=0.0, high=1e4, low_open=True)
+    return mass_parameter(value, doc, _OPTIMTRAJ)
 
 
 def _inertia(value: float, doc: str) -> Any:
@@ -154,7 +155,7 @@ def _inertia(value: float, doc: str) -> Any:
 
 def _length(value: float, doc: str) -> Any:
     """A link length (m, in (0, 10]) from OptimTraj."""
-    return parameter(value, unit="m", doc=doc, source=_OPTIMTRAJ, low=0.0, high=10.0, low_open=True)
+    return length_parameter(value, doc, _OPTIMTRAJ)
 
 
 def _com(value: float, doc: str) -> Any:
@@ -323,13 +324,11 @@ class FiveLinkBiped(HybridModel):
         0.2, "torso centre of mass below the top of the torso c3 (at most the torso length)"
     )
     gravity: float = gravity_parameter(_OPTIMTRAJ)
-    slope: float = parameter(
+    slope: float = slope_parameter(
         0.0,
-        unit="rad",
+        "level ground, as in OptimTraj",
+        (-0.5, 0.5),
         doc="ground slope γ (downhill positive, walking towards +x)",
-        source="level ground, as in OptimTraj",
-        low=-0.5,
-        high=0.5,
     )
 
     def check(self) -> None:

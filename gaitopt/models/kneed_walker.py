@@ -92,6 +92,7 @@ from ..mechanics import (
 )
 from ..parameters import gravity_parameter, parameter
 from .blocks import fall
+from .quantities import length_parameter, mass_parameter, slope_parameter, state_units
 
 __all__ = ["KneedWalker"]
 
@@ -217,94 +218,27 @@ class KneedWalker(HybridModel):
     declared_states = ("q1", "q2", "q3", "q1_dot", "q2_dot", "q3_dot")
     declared_coordinates = ("q1", "q1_dot", "q2_dot")
     declared_section_doc = "just after heel strike: q2 = q3 = 2·slope − q1, q3_dot = q2_dot"
-    state_units = {
-        "q1": "rad",
-        "q2": "rad",
-        "q3": "rad",
-        "q1_dot": "rad/s",
-        "q2_dot": "rad/s",
-        "q3_dot": "rad/s",
-    }  # for axis labels
+    state_units = state_units(q1="rad", q2="rad", q3="rad")  # for axis labels
     title = "Kneed walker"
     reference = "Hsu Chen 2007; McGeer 1990; Tedrake, Underactuated Robotics"
     inputs = ("hip_torque", "knee_torque")
     input_units = ("N*m", "N*m")
     mesh = (4, 5)  # 20 RK8 steps per phase: discretisation error ~1e-11 at the defaults
 
-    mass_hip: float = parameter(
-        0.5, unit="kg", doc="hip point mass m_h", source=_HSU_CHEN, low=0.0, high=1e4, low_open=True
-    )
-    mass_thigh: float = parameter(
-        0.5,
-        unit="kg",
-        doc="thigh point mass m_t (each leg)",
-        source=_HSU_CHEN,
-        low=0.0,
-        high=1e4,
-        low_open=True,
-    )
-    mass_shank: float = parameter(
-        0.05,
-        unit="kg",
-        doc="shank point mass m_s (each leg)",
-        source=_HSU_CHEN,
-        low=0.0,
-        high=1e4,
-        low_open=True,
-    )
-    a1: float = parameter(
-        0.375,
-        unit="m",
-        doc="foot to shank mass distance",
-        source=_HSU_CHEN,
-        low=0.0,
-        high=10.0,
-        low_open=True,
-    )
-    b1: float = parameter(
-        0.125,
-        unit="m",
-        doc="shank mass to knee distance",
-        source=_HSU_CHEN,
-        low=0.0,
-        high=10.0,
-        low_open=True,
-    )
-    a2: float = parameter(
-        0.175,
-        unit="m",
-        doc="knee to thigh mass distance",
-        source=_HSU_CHEN,
-        low=0.0,
-        high=10.0,
-        low_open=True,
-    )
-    b2: float = parameter(
-        0.325,
-        unit="m",
-        doc="thigh mass to hip distance",
-        source=_HSU_CHEN,
-        low=0.0,
-        high=10.0,
-        low_open=True,
-    )
+    mass_hip: float = mass_parameter(0.5, "hip point mass m_h", _HSU_CHEN)
+    mass_thigh: float = mass_parameter(0.5, "thigh point mass m_t (each leg)", _HSU_CHEN)
+    mass_shank: float = mass_parameter(0.05, "shank point mass m_s (each leg)", _HSU_CHEN)
+    a1: float = length_parameter(0.375, "foot to shank mass distance", _HSU_CHEN)
+    b1: float = length_parameter(0.125, "shank mass to knee distance", _HSU_CHEN)
+    a2: float = length_parameter(0.175, "knee to thigh mass distance", _HSU_CHEN)
+    b2: float = length_parameter(0.325, "thigh mass to hip distance", _HSU_CHEN)
     gravity: float = gravity_parameter()
-    slope: float = parameter(
-        0.0504,
-        unit="rad",
-        doc="ground slope γ (downhill positive)",
-        source=_HSU_CHEN,
-        low=0.0,
-        high=0.3,
-    )
+    slope: float = slope_parameter(0.0504, _HSU_CHEN, (0.0, 0.3))
     foot_radius: float = parameter(
-        0.0,
-        unit="m",
+        0.0, unit="m", low=0.0, high=1.0,
         doc="radius R of the circular-arc feet (0: point feet); at most the shank length a1 + b1",
         source="point foot (Hsu Chen 2007); curved feet after McGeer 1990",
-        low=0.0,
-        high=1.0,
-    )
+    )  # fmt: skip
 
     def check(self) -> None:
         shank = self.a1 + self.b1

@@ -41,13 +41,14 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import casadi as ca
 
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import bar_and_ball_points, fall
+from .quantities import restitution_parameter
 
 __all__ = ["LineJuggler"]
 
@@ -56,6 +57,19 @@ _BUEHLER = "Buehler, Koditschek & Kindlmann 1990"
 DROP_DEPTH = 1.0
 #: Half-width (m) of the drawn paddle (drawing only: ball and paddle move on one vertical line).
 PADDLE_HALF_WIDTH = 0.1
+
+
+def energy_gain_parameter(source: str) -> Any:
+    """The mirror law's energy-feedback gain ``κ1`` (s²/m², per unit mass), default 0.04, range
+    [0, 10] (the planar juggler's too)."""
+    doc = "energy-feedback gain κ1 of the mirror law (per unit mass)"
+    return parameter(0.04, unit="s^2/m^2", doc=doc, source=source, low=0.0, high=10.0)
+
+
+def impact_speed_parameter(source: str) -> Any:
+    """The mirror law's desired impact speed ``ḃ_d`` (m/s), default 3 m/s, range (0, 100]."""
+    doc = "desired impact speed ḃ_d (E_d = ½ ḃ_d²)"
+    return parameter(3.0, unit="m/s", doc=doc, source=source, low=0.0, high=100.0, low_open=True)
 
 
 @dataclass(frozen=True)
@@ -81,33 +95,15 @@ class LineJuggler(HybridModel):
     #: No ground under the scene (see :mod:`gaitopt.animation`).
     on_ground: ClassVar[bool] = False
 
-    restitution: float = parameter(
+    restitution: float = restitution_parameter(
         0.8,
-        unit="1",
-        doc="coefficient of restitution e of the ball on the paddle",
-        source="chosen for the textbook juggling exercise (Underactuated Robotics, ch. 4)",
-        low=0.0,
-        high=1.0,
-        low_open=True,
-        high_open=True,
+        "coefficient of restitution e of the ball on the paddle",
+        "chosen for the textbook juggling exercise (Underactuated Robotics, ch. 4)",
     )
-    kappa1: float = parameter(
-        0.04,
-        unit="s^2/m^2",
-        doc="energy-feedback gain κ1 of the mirror law (per unit mass)",
-        source="inside the stable range (0, 2/((1+e) ḃ_d²)) = (0, 0.1235) at the defaults",
-        low=0.0,
-        high=10.0,
+    kappa1: float = energy_gain_parameter(
+        "inside the stable range (0, 2/((1+e) ḃ_d²)) = (0, 0.1235) at the defaults"
     )
-    desired_speed: float = parameter(
-        3.0,
-        unit="m/s",
-        doc="desired impact speed ḃ_d (E_d = ½ ḃ_d²)",
-        source="chosen for the textbook juggling exercise",
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+    desired_speed: float = impact_speed_parameter("chosen for the textbook juggling exercise")
     gravity: float = gravity_parameter()
 
     @classmethod

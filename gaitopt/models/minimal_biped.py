@@ -71,113 +71,44 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ParameterError
-from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
-from ..parameters import gravity_parameter, parameter
-from .blocks import ballistic_flow, fall, hip_about_foot
+from ..hybrid import Constraint, HybridModel, Phase, Section, Symbols, Transition
+from ..parameters import gravity_parameter
+from .polar import STANCE, UNITS, flight_to_foothold, foot_stance, leg_power, liftoff
+from .quantities import length_parameter, mass_parameter
 
 __all__ = ["MinimalBipedWalk", "MinimalBipedRun"]
 
 _SR = "Srinivasan & Ruina 2006 (Nature 439:72), M = l_max = 1 in their units"
-_STANCE = ("r", "theta", "r_dot", "theta_dot")
-_FLIGHT = ("x", "z", "x_dot", "z_dot")
-_UNITS = {
-    "r": "m",
-    "theta": "rad",
-    "r_dot": "m/s",
-    "theta_dot": "rad/s",
-    "x": "m",
-    "z": "m",
-    "x_dot": "m/s",
-    "z_dot": "m/s",
-}
 
 
 def _stance(sym: Symbols, closing: Transition, *, touchdown_at_full_length: bool) -> Phase:
-    """The stance phase about the stance foot, ending with ``closing``."""
-    m, g, lmax = sym.mass, sym.gravity, sym.leg_length
+    """The stance phase about the stance foot, ending with ``closing``: the leg force ``F`` alone
+    pushes (no spring), and the leg is no longer than ``l_max``."""
     force = sym.input("leg_force")
-    xs, (r, th, r_dot, th_dot) = sym.states(*_STANCE)
-    flow = sym.function(
-        "flow",
-        xs,
-        ca.vertcat(
-            r_dot,
-            th_dot,
-            r * th_dot**2 - g * ca.cos(th) + force / m,  # radial: gravity, centripetal, F/M
-            (g * ca.sin(th) - 2 * r_dot * th_dot) / r,  # no torque about the foot
-        ),
-    )
-    hip_x, hip_z, hip_xd, hip_zd = hip_about_foot(r, th, r_dot, th_dot)
-    energy = 0.5 * m * (r_dot**2 + r**2 * th_dot**2) + m * g * hip_z
-    constraints = (
-        sym.constraint(
-            "leg pushes",
-            xs,
-            force,
-            "leg pulls",
-            unit="N",
-            source="a leg on the ground can only push (Srinivasan & Ruina 2006: F ≥ 0)",
-        ),
-        sym.constraint(
+
+    def within_length(xs: ca.SX, r: ca.SX) -> Constraint:
+        return sym.constraint(
             "leg within its length",
             xs,
-            lmax - r,
+            sym.leg_length - r,
             "leg longer than leg_length",
             at_start=touchdown_at_full_length,
             at_end=touchdown_at_full_length,
             unit="m",
             source="telescoping leg of length at most l_max (Srinivasan & Ruina 2006)",
-        ),
-        sym.constraint(
-            "hip above the ground",
-            xs,
-            hip_z,
-            "hip reaches the ground",
-            unit="m",
-            source="the body cannot go below the ground",
-        ),
-    )
-    falls = (
-        fall(
-            sym,
-            xs,
+        )
+
+    return foot_stance(
+        sym,
+        closing,
+        leg_force=lambda r: force,
+        push_source="a leg on the ground can only push (Srinivasan & Ruina 2006: F ≥ 0)",
+        falls_back=(
             "falls back (the hip stops vaulting over the foot)",
-            th_dot,
             "θ̇ falls through 0 in stance: too little forward speed",
         ),
+        conditions=(within_length,),
     )
-    return Phase(
-        "stance",
-        _STANCE,
-        flow,
-        (closing, *falls),
-        {"energy": sym.conserved("energy", xs, energy)},  # constant where F = 0
-        points=ca.Function(
-            "points",
-            [xs, sym.p],
-            [ca.horzcat(ca.DM.zeros(2, 1), ca.vertcat(hip_x, hip_z), _next_foot(sym))],
-        ),
-        point_names=("foot", "hip", "next_foot"),
-        bodies=ca.Function(
-            "bodies",
-            [xs, sym.p],
-            [m, ca.vertcat(hip_x, hip_z), ca.vertcat(hip_xd, hip_zd)],
-            ["x", "p"],
-            ["m", "r", "v"],
-        ),
-        constraints=constraints,
-    )
-
-
-def _next_foot(sym: Symbols) -> ca.SX:
-    """The next foothold, ``(d, 0)`` from the stance foot (m)."""
-    return ca.vertcat(sym.step_length, 0)
-
-
-def _stance_rates(n_params: int) -> ca.Function:
-    x = ca.SX.sym("x", 4)
-    p = ca.SX.sym("p", n_params)
-    return ca.Function("input_rates", [x, p], [x[2]], ["x", "p"], ["rates"])
 
 
 def _check_step(model: HybridModel) -> None:
@@ -189,18 +120,28 @@ def _check_step(model: HybridModel) -> None:
         )
 
 
+@dataclass(frozen=True)
 class _MinimalBiped(HybridModel):
     """Parameters and conventions shared by the walking and running sequences."""
 
     reference = "Srinivasan & Ruina 2006, Nature 439:72-75"
     passive_gait = False
-    state_units = _UNITS
+    state_units = UNITS
     inputs = ("leg_force",)
     input_units = ("N",)
     #: The leg can only push (Srinivasan & Ruina 2006: F ≥ 0).
     input_bounds: ClassVar[dict[str, tuple[float, float]]] = {"leg_force": (0.0, float("inf"))}
     drawing = (("foot", "hip"),)
     max_phase_time: ClassVar[float] = 5.0
+
+    mass: float = mass_parameter(1.0, "body mass M", _SR)
+    leg_length: float = length_parameter(1.0, "longest leg l_max", _SR)
+    step_length: float = length_parameter(
+        0.6,
+        "step length d, foot to foot (free it to optimise it: free=('step_length',))",
+        "a human-like 0.6 l_max (Srinivasan & Ruina 2006 map the optimum over d)",
+    )
+    gravity: float = gravity_parameter()
 
     def check(self) -> None:
         _check_step(self)
@@ -217,29 +158,6 @@ class _MinimalBiped(HybridModel):
         )
 
 
-def _params():
-    return {
-        "mass": parameter(
-            1.0, unit="kg", doc="body mass M", source=_SR, low=0.0, high=1e4, low_open=True
-        ),  # fmt: skip
-        "leg_length": parameter(
-            1.0, unit="m", doc="longest leg l_max", source=_SR, low=0.0, high=10.0, low_open=True
-        ),  # fmt: skip
-        "step_length": parameter(
-            0.6,
-            unit="m",
-            doc="step length d, foot to foot (free it to optimise it: free=('step_length',))",
-            source="a human-like 0.6 l_max (Srinivasan & Ruina 2006 map the optimum over d)",
-            low=0.0,
-            high=10.0,
-            low_open=True,
-        ),
-    }
-
-
-_P = _params()
-
-
 @dataclass(frozen=True)
 class MinimalBipedWalk(_MinimalBiped):
     """Minimal biped, walking: stance state ``r`` (m), ``theta`` (rad), ``r_dot`` (m/s),
@@ -247,18 +165,13 @@ class MinimalBipedWalk(_MinimalBiped):
 
     name = "minimal_biped_walk"
     title = "Minimal biped, walking (point mass, telescoping legs)"
-    declared_states = _STANCE
+    declared_states = STANCE
     declared_coordinates = ("r", "theta_dot")
     declared_section_doc = "just after heel strike: r_dot = 0, r·sin(theta) = −step_length/2"
 
-    mass: float = _P["mass"]
-    leg_length: float = _P["leg_length"]
-    step_length: float = _P["step_length"]
-    gravity: float = gravity_parameter()
-
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
-        xs, (r, th, r_dot, th_dot) = sym.states(*_STANCE)
+        xs, (r, th, r_dot, th_dot) = sym.states(*STANCE)
         s2, c2 = ca.sin(2 * th), ca.cos(2 * th)
         heel = Transition(
             name="heel strike",
@@ -287,7 +200,7 @@ class MinimalBipedWalk(_MinimalBiped):
     def input_rates(self, phase: int) -> ca.Function:
         """The leg force does the power ``F ṙ`` (W) in stance."""
         del phase
-        return _stance_rates(len(self.parameter_specs()))
+        return leg_power(len(self.parameter_specs()), stance=True)
 
 
 @dataclass(frozen=True)
@@ -298,87 +211,29 @@ class MinimalBipedRun(_MinimalBiped):
 
     name = "minimal_biped_run"
     title = "Minimal biped, running (point mass, telescoping legs)"
-    declared_states = _STANCE
+    declared_states = STANCE
     declared_coordinates = ("theta", "r_dot", "theta_dot")
     declared_section_doc = "just after touchdown: r = leg_length"
 
-    mass: float = _P["mass"]
-    leg_length: float = _P["leg_length"]
-    step_length: float = _P["step_length"]
-    gravity: float = gravity_parameter()
-
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
-        lmax, d, g, m = sym.leg_length, sym.step_length, sym.gravity, sym.mass
-        xs, (r, th, r_dot, th_dot) = sym.states(*_STANCE)
-        hx, hz, hxd, hzd = hip_about_foot(r, th, r_dot, th_dot)
-        liftoff = Transition(
+        lmax = sym.leg_length
+        xs = sym.states(*STANCE)[0]
+        lift = liftoff(
+            sym,
+            xs,
+            lmax,
             name="lift-off",
-            guard=sym.function("guard", xs, r - lmax),
-            direction=+1,
-            reset=sym.function("reset", xs, ca.vertcat(hx, hz, hxd, hzd)),
             target=1,
-            admissible=sym.function("admissible", xs, hxd),  # moving forwards
-            impact=False,
             doc="the leg regains its full length, r = l_max, extending; Cartesian flight state "
             "with x from the stance foot",
         )
-        stance = _stance(sym, liftoff, touchdown_at_full_length=True)
-
-        xf, (x, z, x_dot, z_dot) = sym.states(*_FLIGHT)
-        dx = x - d
-        dist2 = dx**2 + z**2
-        rr = ca.sqrt(dist2)
-        touchdown = Transition(
-            name="touchdown",
-            guard=sym.function("guard", xf, lmax**2 - dist2),
-            direction=+1,
-            reset=sym.function(
-                "reset",
-                xf,
-                ca.vertcat(
-                    rr,
-                    ca.atan2(dx, z),
-                    (dx * x_dot + z * z_dot) / rr,
-                    (z * x_dot - dx * z_dot) / dist2,
-                ),
-            ),
-            target=0,
-            admissible=sym.function("admissible", xf, z),  # the hip above the new foot's level
-            impact=False,  # a massless leg: the velocity is only re-expressed
-            foothold="next_foot",
+        stance = _stance(sym, lift, touchdown_at_full_length=True)
+        flight = flight_to_foothold(
+            sym,
+            lmax,
             doc="the hip comes within l_max of the next foothold (x = d): (x − d)² + z² = "
             "l_max², approaching; polar state about the new foot",
-        )
-        flight = Phase(
-            "flight",
-            _FLIGHT,
-            ballistic_flow(sym, xf, g, vertical=1),
-            (touchdown, fall(sym, xf, "falls (hip reaches the ground in flight)", z, "z = 0")),
-            {"energy": sym.conserved("energy", xf, 0.5 * m * (x_dot**2 + z_dot**2) + m * g * z)},
-            points=ca.Function(
-                "points",
-                [xf, sym.p],
-                [ca.horzcat(ca.DM.zeros(2, 1), ca.vertcat(x, z), _next_foot(sym))],
-            ),
-            point_names=("foot", "hip", "next_foot"),
-            bodies=ca.Function(
-                "bodies",
-                [xf, sym.p],
-                [m, ca.vertcat(x, z), ca.vertcat(x_dot, z_dot)],
-                ["x", "p"],
-                ["m", "r", "v"],
-            ),
-            constraints=(
-                sym.constraint(
-                    "hip above the ground",
-                    xf,
-                    z,
-                    "hip reaches the ground",
-                    unit="m",
-                    source="the body cannot go below the ground",
-                ),
-            ),
         )
         s, (sth, sr_dot, sth_dot) = sym.states("theta", "r_dot", "theta_dot")
         lift = ca.vertcat(lmax, sth, sr_dot, sth_dot)
@@ -403,8 +258,4 @@ class MinimalBipedRun(_MinimalBiped):
 
     def input_rates(self, phase: int) -> ca.Function:
         """The leg force does the power ``F ṙ`` (W) in stance and none in flight."""
-        if phase == 0:
-            return _stance_rates(len(self.parameter_specs()))
-        x = ca.SX.sym("x", 4)
-        p = ca.SX.sym("p", len(self.parameter_specs()))
-        return ca.Function("input_rates", [x, p], [ca.SX(0)], ["x", "p"], ["rates"])
+        return leg_power(len(self.parameter_specs()), stance=phase == 0)

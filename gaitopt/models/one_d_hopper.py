@@ -102,6 +102,7 @@ from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import apex, fall
+from .quantities import length_parameter, mass_parameter, state_units, stiffness_parameter
 
 __all__ = ["OneDHopper"]
 
@@ -129,33 +130,27 @@ class OneDHopper(HybridModel):
     declared_states = ("z_b", "l", "z_b_dot", "l_dot")
     declared_coordinates = ("z_b",)
     declared_section_doc = "apex: z_b_dot = 0, leg on its hard stop (l = 0, l_dot = 0)"
-    state_units = {"z_b": "m", "l": "m", "z_b_dot": "m/s", "l_dot": "m/s", "delta": "m"}
+    state_units = {**state_units(z_b="m", l="m"), "delta": "m"}
     title = "One-dimensional hopper (deadbeat preload)"
     reference = "Tedrake, Underactuated Robotics, One-Dimensional Hopper exercise; Raibert 1984"
     mesh = (4, 4)
     max_phase_time: ClassVar[float] = 10.0
 
-    body_mass: float = parameter(
-        10.0, unit="kg", doc="body mass m_b", source=_URDF + " (link body)", low=0.0, high=1e4,
-        low_open=True,
-    )  # fmt: skip
-    leg_mass: float = parameter(
-        1.0, unit="kg", doc="leg mass m_l", source=_URDF + " (link leg)", low=0.0, high=1e4,
-        low_open=True,
-    )  # fmt: skip
-    stiffness: float = parameter(
-        1000.0, unit="N/m", doc="spring stiffness k", source=_NOTEBOOK + ", get_hopper_parameters",
-        low=0.0, high=1e8, low_open=True,
-    )  # fmt: skip
+    body_mass: float = mass_parameter(10.0, "body mass m_b", _URDF + " (link body)")
+    leg_mass: float = mass_parameter(1.0, "leg mass m_l", _URDF + " (link leg)")
+    stiffness: float = stiffness_parameter(
+        1000.0, "spring stiffness k", _NOTEBOOK + ", get_hopper_parameters", high=1e8
+    )
     desired_apex: float = parameter(
         1.0, unit="m", doc="desired apex height h_d of the preload law (0: never preload)",
         source=_NOTEBOOK + " (h = 1)", low=0.0, high=100.0,
     )  # fmt: skip
-    stroke: float = parameter(
-        0.76, unit="m", doc="leg stroke s: the largest l (the leg's lower plate meets the body)",
-        source=_URDF + " (collision boxes; the commented joint limit upper=0.76)", low=0.0,
-        high=100.0, low_open=True,
-    )  # fmt: skip
+    stroke: float = length_parameter(
+        0.76,
+        "leg stroke s: the largest l (the leg's lower plate meets the body)",
+        _URDF + " (collision boxes; the commented joint limit upper=0.76)",
+        high=100.0,
+    )
     gravity: float = gravity_parameter(source="standard gravity (the exercise's Drake default)")
 
     @classmethod

@@ -80,6 +80,8 @@ import numpy as np
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import fall
+from .line_juggler import energy_gain_parameter, impact_speed_parameter
+from .quantities import length_parameter, restitution_parameter, state_units
 
 __all__ = ["PlanarJuggler"]
 
@@ -105,14 +107,7 @@ class PlanarJuggler(HybridModel):
         "just before an impact: x = impact position, x_dot_pre, energy_pre = pre-impact horizontal"
         " velocity and energy; y on the paddle, velocities after the impact"
     )
-    state_units = {
-        "x": "m",
-        "y": "m",
-        "x_dot": "m/s",
-        "y_dot": "m/s",
-        "x_dot_pre": "m/s",
-        "energy_pre": "J/kg",
-    }  # for axis labels
+    state_units = {**state_units(x="m", y="m"), "x_dot_pre": "m/s", "energy_pre": "J/kg"}
     title = "Planar juggler (one-link paddle, mirror law)"
     reference = "Buehler, Koditschek & Kindlmann 1990"
     mesh = (4, 4)
@@ -123,57 +118,28 @@ class PlanarJuggler(HybridModel):
     #: No ground under the scene (see :mod:`gaitopt.animation`).
     on_ground: ClassVar[bool] = False
 
-    restitution: float = parameter(
-        0.8,
-        unit="1",
-        doc="coefficient of restitution e of the ball on the paddle",
-        source="as the line juggler",
-        low=0.0,
-        high=1.0,
-        low_open=True,
-        high_open=True,
+    restitution: float = restitution_parameter(
+        0.8, "coefficient of restitution e of the ball on the paddle", "as the line juggler"
     )
-    kappa1: float = parameter(
-        0.04,
-        unit="s^2/m^2",
-        doc="energy-feedback gain κ1 of the mirror law (per unit mass)",
-        source="as the line juggler: stable range (0, 2/((1+e) ḃ_d²)) = (0, 0.1235)",
-        low=0.0,
-        high=10.0,
+    kappa1: float = energy_gain_parameter(
+        "as the line juggler: stable range (0, 2/((1+e) ḃ_d²)) = (0, 0.1235)"
     )
     kappa_x: float = parameter(
-        0.15,
-        unit="rad/m",
+        0.15, unit="rad/m", low=-10.0, high=10.0,
         doc="horizontal-position gain κ_x of the mirror law (paddle tilt per metre of x − x̄)",
         source="inside the stable range (0, (4 − 2 a κ_ẋ)/(a T)) = (0, 0.884) at the defaults",
-        low=-10.0,
-        high=10.0,
-    )
+    )  # fmt: skip
     kappa_xdot: float = parameter(
-        0.1,
-        unit="rad s/m",
+        0.1, unit="rad s/m", low=-10.0, high=10.0,
         doc="horizontal-velocity gain κ_ẋ of the mirror law",
         source="inside the stable range (0, 2/((1+e) ḃ_d)) = (0, 0.370); deadbeat at 0.185",
-        low=-10.0,
-        high=10.0,
-    )
-    desired_speed: float = parameter(
-        3.0,
-        unit="m/s",
-        doc="desired impact speed ḃ_d (E_d = ½ ḃ_d²)",
-        source="as the line juggler",
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
-    desired_position: float = parameter(
+    )  # fmt: skip
+    desired_speed: float = impact_speed_parameter("as the line juggler")
+    desired_position: float = length_parameter(
         0.5,
-        unit="m",
-        doc="desired impact point x̄ on the paddle (distance from the pivot)",
-        source="a bar of about a metre (Buehler et al. 1990's one-link juggler)",
-        low=0.0,
+        "desired impact point x̄ on the paddle (distance from the pivot)",
+        "a bar of about a metre (Buehler et al. 1990's one-link juggler)",
         high=100.0,
-        low_open=True,
     )
     gravity: float = gravity_parameter()
 

@@ -66,6 +66,7 @@ from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import apex, ballistic_flow, fall
+from .quantities import energy_parameter, length_parameter, mass_parameter, stiffness_parameter
 
 __all__ = ["PlanarQuadruped", "PlanarQuadrupedPronk"]
 
@@ -76,6 +77,8 @@ _PAPER = (
     "towards the half-bound and the gallop gaits', without its parameter table)"
 )
 _FLIGHT = ("x", "z", "phi", "x_dot", "z_dot", "phi_dot")
+#: Drawing points of every phase.
+POINT_NAMES = ("back_hip", "front_hip", "back_foot", "front_foot")
 _UNITS = {
     "x": "m",
     "z": "m",
@@ -103,6 +106,39 @@ def _hips(q):
             )
         )
     return out  # [back, front]
+
+
+def _drawing(sym: Symbols, x: ca.SX, hips, l0: ca.SX, feet) -> ca.Function:
+    """``points(x, p)`` (m): the back and front hips, then each foot of ``feet = [(hip, foot,
+    angle), ...]``: on the ground at ``(foot, 0)``, or, ``foot`` None, held at ``angle`` from
+    vertical at the rest length ``l0`` below its hip."""
+    back, front = hips
+    cols = [ca.vertcat(back[0], back[1]), ca.vertcat(front[0], front[1])]
+    for hip, foot, angle in feet:
+        if foot is None:
+            cols.append(ca.vertcat(hip[0] + l0 * ca.sin(angle), hip[1] - l0 * ca.cos(angle)))
+        else:
+            cols.append(ca.vertcat(foot, 0))
+    return ca.Function("points", [x, sym.p], [ca.horzcat(*cols)])
+
+
+def _energy():
+    """The total energy ``E`` (J) of the passive bound and pronk, a parameter."""
+    return energy_parameter(
+        90.0,
+        "total energy E (kinetic + m g z + spring)",
+        "chosen: E/(m g) = 0.44 m, above the touchdown height l0·cos θ ≈ 0.31 m; "
+        "a passive gait exists there (tests/test_planar_quadruped.py)",
+    )
+
+
+def _touchdown_angle(leg: str):
+    """The nominal touchdown angle of the ``leg`` ("back", "front") as a parameter (rad)."""
+    return parameter(
+        0.21, unit="rad", low=-math.pi / 2, high=math.pi / 2, low_open=True, high_open=True,
+        doc=f"nominal {leg}-leg touchdown angle from vertical (foot ahead > 0)",
+        source="chosen: a passive bound exists there (found by tests/test_planar_quadruped.py)",
+    )  # fmt: skip
 
 
 class _Legs:
@@ -205,18 +241,49 @@ class _Legs:
             self.sym, x, "falls (a hip reaches the ground)", ca.fmin(hips[0][1], hips[1][1]), doc
         )
 
+    def flight(self, name, x, ending, falls, angles, constraints=()):
+        """A ballistic phase, both feet in the air (drawn at ``angles`` = back, front): it ends
+        with ``ending`` or with a hip reaching the ground (``falls``: in words)."""
+        back, front = self.hips(x)
+        return Phase(
+            name,
+            _FLIGHT,
+            ballistic_flow(self.sym, x, self.g, vertical=1),
+            (ending, self.body_falls(x, (back, front), falls)),
+            {"energy": self.energy(x, [])},
+            points=self.points(x, [(back, None, angles[0]), (front, None, angles[1])]),
+            point_names=POINT_NAMES,
+            constraints=constraints,
+        )
+
+    def single_stance(self, leg, target, angles, constraints=lambda x, back, front: ()):
+        """The stance on the ``leg`` ("back" or "front") alone, ending at its liftoff (into phase
+        ``target``) or with a hip reaching the ground; ``constraints(x, back, front)`` adds
+        conditions after the leg's compression."""
+        x = _stance_states(f"{leg}_foot")
+        back, front = self.hips(x)
+        hip, foot = (back if leg == "back" else front), x[6]
+        feet = [(back, foot if leg == "back" else None), (front, foot if leg == "front" else None)]
+        liftoff = self.liftoff(
+            f"{leg} liftoff", x, hip, foot, (), target, f"{leg} leg at rest length, extending"
+        )
+        return Phase(
+            f"{leg} stance",
+            (*_FLIGHT, f"{leg}_foot"),
+            self.flow(x, [(hip, foot)]),
+            (
+                liftoff,
+                self.body_falls(x, (back, front), f"a hip reaches the ground in {leg} stance"),
+            ),
+            {"energy": self.energy(x, [(hip, foot)])},
+            points=self.points(x, [(h, f, a) for (h, f), a in zip(feet, angles, strict=True)]),
+            point_names=POINT_NAMES,
+            constraints=(self.compressive(x, hip, foot, leg), *constraints(x, back, front)),
+        )
+
     def points(self, x, feet):
         """Drawing: back hip, front hip, and each foot (on the ground or held in flight)."""
-        back, front = self.hips(x)
-        cols = [ca.vertcat(back[0], back[1]), ca.vertcat(front[0], front[1])]
-        for hip, foot, angle in feet:
-            if foot is None:
-                cols.append(
-                    ca.vertcat(hip[0] + self.l0 * ca.sin(angle), hip[1] - self.l0 * ca.cos(angle))
-                )
-            else:
-                cols.append(ca.vertcat(foot, 0))
-        return ca.Function("points", [x, self.sym.p], [ca.horzcat(*cols)])
+        return _drawing(self.sym, x, self.hips(x), self.l0, feet)
 
     def apex_section(self, x, coordinates):
         top = apex(
@@ -267,39 +334,14 @@ class _QuadrupedBase(HybridModel):
     mesh = (6, 4)
     max_phase_time: ClassVar[float] = 5.0
 
-    mass: float = parameter(
-        20.865, unit="kg", doc="body mass m", source=_PAPER, low=0.0, high=1e4, low_open=True
-    )
+    mass: float = mass_parameter(20.865, "body mass m", _PAPER)
     inertia: float = parameter(
-        1.3,
-        unit="kg*m^2",
-        doc="pitch moment of inertia I about the COM",
-        source=_PAPER,
-        low=0.0,
-        high=1e4,
-        low_open=True,
-    )
-    half_length: float = parameter(
-        0.276,
-        unit="m",
-        doc="hip distance L from the COM (hips at ±L)",
-        source=_PAPER,
-        low=0.0,
-        high=10.0,
-        low_open=True,
-    )
-    rest_length: float = parameter(
-        0.323, unit="m", doc="leg rest length l0", source=_PAPER, low=0.0, high=10.0, low_open=True
-    )
-    stiffness: float = parameter(
-        3520.0,
-        unit="N/m",
-        doc="leg stiffness k (each sagittal leg)",
-        source=_PAPER,
-        low=0.0,
-        high=1e7,
-        low_open=True,
-    )
+        1.3, unit="kg*m^2", low=0.0, high=1e4, low_open=True,
+        doc="pitch moment of inertia I about the COM", source=_PAPER,
+    )  # fmt: skip
+    half_length: float = length_parameter(0.276, "hip distance L from the COM (hips at ±L)", _PAPER)
+    rest_length: float = length_parameter(0.323, "leg rest length l0", _PAPER)
+    stiffness: float = stiffness_parameter(3520.0, "leg stiffness k (each sagittal leg)", _PAPER)
     gravity: float = gravity_parameter()
 
     def _touchdown_heights(self) -> list[float]:
@@ -361,36 +403,9 @@ class PlanarQuadruped(_QuadrupedBase):
         "front_touchdown_angle": (-math.pi / 2, math.pi / 2),
     }
 
-    back_touchdown_angle: float = parameter(
-        0.21,
-        unit="rad",
-        doc="nominal back-leg touchdown angle from vertical (foot ahead > 0)",
-        source="chosen: a passive bound exists there (found by tests/test_planar_quadruped.py)",
-        low=-math.pi / 2,
-        high=math.pi / 2,
-        low_open=True,
-        high_open=True,
-    )
-    front_touchdown_angle: float = parameter(
-        0.21,
-        unit="rad",
-        doc="nominal front-leg touchdown angle from vertical (foot ahead > 0)",
-        source="chosen: a passive bound exists there (found by tests/test_planar_quadruped.py)",
-        low=-math.pi / 2,
-        high=math.pi / 2,
-        low_open=True,
-        high_open=True,
-    )
-    energy: float = parameter(
-        90.0,
-        unit="J",
-        doc="total energy E (kinetic + m g z + spring)",
-        source="chosen: E/(m g) = 0.44 m, above the touchdown height l0·cos θ ≈ 0.31 m; "
-        "a passive gait exists there (tests/test_planar_quadruped.py)",
-        low=0.0,
-        high=1e8,
-        low_open=True,
-    )
+    back_touchdown_angle: float = _touchdown_angle("back")
+    front_touchdown_angle: float = _touchdown_angle("front")
+    energy: float = _energy()
 
     def _touchdown_heights(self):
         return [
@@ -415,52 +430,30 @@ class PlanarQuadruped(_QuadrupedBase):
         # 0 descent: apex → back touchdown, front foot above the ground
         xd = _flight_states()
         back, front = legs.hips(xd)
-        descent = Phase(
+        descent = legs.flight(
             "descent",
-            _FLIGHT,
-            ballistic_flow(sym, xd, legs.g, vertical=1),
-            (
-                legs.touchdown(
-                    "back touchdown",
-                    xd,
-                    back,
-                    tb,
-                    (),
-                    1,
-                    "back foot reaches the ground: z_back − l0 cos θ_b = 0, falling",
-                ),
-                legs.body_falls(xd, (back, front), "a hip reaches the ground in flight"),
+            xd,
+            legs.touchdown(
+                "back touchdown",
+                xd,
+                back,
+                tb,
+                (),
+                1,
+                "back foot reaches the ground: z_back − l0 cos θ_b = 0, falling",
             ),
-            {"energy": legs.energy(xd, [])},
-            points=legs.points(xd, [(back, None, pb), (front, None, pf)]),
-            point_names=("back_hip", "front_hip", "back_foot", "front_foot"),
-            constraints=(
-                legs.above(
-                    xd, front, tf, "front", "front foot touches down first (not this bound)"
-                ),
-            ),
+            "a hip reaches the ground in flight",
+            (pb, pf),
+            (legs.above(xd, front, tf, "front", "front foot touches down first (not this bound)"),),
         )
-        # 1 back stance
-        xb = _stance_states("back_foot")
-        back, front = legs.hips(xb)
-        fb = xb[6]
-        back_stance = Phase(
-            "back stance",
-            (*_FLIGHT, "back_foot"),
-            legs.flow(xb, [(back, fb)]),
-            (
-                legs.liftoff(
-                    "back liftoff", xb, back, fb, (), 2, "back leg at rest length, extending"
-                ),
-                legs.body_falls(xb, (back, front), "a hip reaches the ground in back stance"),
-            ),
-            {"energy": legs.energy(xb, [(back, fb)])},
-            points=legs.points(xb, [(back, fb, pb), (front, None, pf)]),
-            point_names=("back_hip", "front_hip", "back_foot", "front_foot"),
-            constraints=(
-                legs.compressive(xb, back, fb, "back"),
+        # 1 back stance, the front foot above the ground
+        back_stance = legs.single_stance(
+            "back",
+            2,
+            (pb, pf),
+            lambda x, back, front: (
                 legs.above(
-                    xb,
+                    x,
                     front,
                     tf,
                     "front",
@@ -470,59 +463,25 @@ class PlanarQuadruped(_QuadrupedBase):
         )
         # 2 flight between: back liftoff → front touchdown
         xm = _flight_states()
-        back, front = legs.hips(xm)
-        middle = Phase(
-            "flight",
-            _FLIGHT,
-            ballistic_flow(sym, xm, legs.g, vertical=1),
-            (
-                legs.touchdown(
-                    "front touchdown",
-                    xm,
-                    front,
-                    tf,
-                    (),
-                    3,
-                    "front foot reaches the ground: z_front − l0 cos θ_f = 0, falling",
-                ),
-                legs.body_falls(xm, (back, front), "a hip reaches the ground in flight"),
-            ),
-            {"energy": legs.energy(xm, [])},
-            points=legs.points(xm, [(back, None, pb), (front, None, pf)]),
-            point_names=("back_hip", "front_hip", "back_foot", "front_foot"),
+        front = legs.hips(xm)[1]
+        touchdown = legs.touchdown(
+            "front touchdown",
+            xm,
+            front,
+            tf,
+            (),
+            3,
+            "front foot reaches the ground: z_front − l0 cos θ_f = 0, falling",
+        )
+        middle = legs.flight(
+            "flight", xm, touchdown, "a hip reaches the ground in flight", (pb, pf)
         )
         # 3 front stance
-        xf = _stance_states("front_foot")
-        back, front = legs.hips(xf)
-        ff = xf[6]
-        front_stance = Phase(
-            "front stance",
-            (*_FLIGHT, "front_foot"),
-            legs.flow(xf, [(front, ff)]),
-            (
-                legs.liftoff(
-                    "front liftoff", xf, front, ff, (), 4, "front leg at rest length, extending"
-                ),
-                legs.body_falls(xf, (back, front), "a hip reaches the ground in front stance"),
-            ),
-            {"energy": legs.energy(xf, [(front, ff)])},
-            points=legs.points(xf, [(back, None, pb), (front, ff, pf)]),
-            point_names=("back_hip", "front_hip", "back_foot", "front_foot"),
-            constraints=(legs.compressive(xf, front, ff, "front"),),
-        )
+        front_stance = legs.single_stance("front", 4, (pb, pf))
         # 4 ascent → apex
         xa = _flight_states()
-        back, front = legs.hips(xa)
         top, section = legs.apex_section(xa, ("z", "phi", "phi_dot"))
-        ascent = Phase(
-            "ascent",
-            _FLIGHT,
-            ballistic_flow(sym, xa, legs.g, vertical=1),
-            (top, legs.body_falls(xa, (back, front), "lifted off falling: no apex")),
-            {"energy": legs.energy(xa, [])},
-            points=legs.points(xa, [(back, None, pb), (front, None, pf)]),
-            point_names=("back_hip", "front_hip", "back_foot", "front_foot"),
-        )
+        ascent = legs.flight("ascent", xa, top, "lifted off falling: no apex", (pb, pf))
         return (descent, back_stance, middle, front_stance, ascent), section
 
 
@@ -544,25 +503,12 @@ class PlanarQuadrupedPronk(_QuadrupedBase):
     input_bounds: ClassVar[dict[str, tuple[float, float]]] = {"touchdown_angle": (0.0, math.pi / 2)}
 
     touchdown_angle: float = parameter(
-        0.25,
-        unit="rad",
+        0.25, unit="rad", low=0.0, high=math.pi / 2, high_open=True,
         doc="nominal touchdown angle of both legs from vertical",
         source="chosen: a passive pronk exists there "
         "(the SLIP(2k) gait, tests/test_planar_quadruped.py)",
-        low=0.0,
-        high=math.pi / 2,
-        high_open=True,
-    )
-    energy: float = parameter(
-        90.0,
-        unit="J",
-        doc="total energy E (kinetic + m g z + spring)",
-        source="chosen: E/(m g) = 0.44 m, above the touchdown height l0·cos θ ≈ 0.31 m; "
-        "a passive gait exists there (tests/test_planar_quadruped.py)",
-        low=0.0,
-        high=1e8,
-        low_open=True,
-    )
+    )  # fmt: skip
+    energy: float = _energy()
 
     def _touchdown_heights(self):
         return [self.rest_length * math.cos(self.touchdown_angle)]
@@ -602,15 +548,7 @@ class PlanarQuadrupedPronk(_QuadrupedBase):
             impact=False,
             doc="both feet reach the ground (pitch-free: z − l0 cos θ = 0, falling)",
         )
-        descent = Phase(
-            "descent",
-            _FLIGHT,
-            ballistic_flow(sym, xd, legs.g, vertical=1),
-            (touchdown, legs.body_falls(xd, (back, front), "apex below touchdown height")),
-            {"energy": legs.energy(xd, [])},
-            points=legs.points(xd, [(back, None, pd), (front, None, pd)]),
-            point_names=("back_hip", "front_hip", "back_foot", "front_foot"),
-        )
+        descent = legs.flight("descent", xd, touchdown, "apex below touchdown height", (pd, pd))
         # 1 double stance
         xs = _stance_states("back_foot", "front_foot")
         back, front = legs.hips(xs)
@@ -632,7 +570,7 @@ class PlanarQuadrupedPronk(_QuadrupedBase):
             (liftoff, legs.body_falls(xs, (back, front), "a hip reaches the ground in stance")),
             {"energy": legs.energy(xs, stance_legs)},
             points=legs.points(xs, [(back, fb, pd), (front, ff, pd)]),
-            point_names=("back_hip", "front_hip", "back_foot", "front_foot"),
+            point_names=POINT_NAMES,
             constraints=(
                 legs.compressive(xs, back, fb, "back"),
                 legs.compressive(xs, front, ff, "front"),
@@ -640,15 +578,6 @@ class PlanarQuadrupedPronk(_QuadrupedBase):
         )
         # 2 ascent → apex
         xa = _flight_states()
-        back, front = legs.hips(xa)
         top, section = legs.apex_section(xa, ("z",))
-        ascent = Phase(
-            "ascent",
-            _FLIGHT,
-            ballistic_flow(sym, xa, legs.g, vertical=1),
-            (top, legs.body_falls(xa, (back, front), "lifted off falling: no apex")),
-            {"energy": legs.energy(xa, [])},
-            points=legs.points(xa, [(back, None, pd), (front, None, pd)]),
-            point_names=("back_hip", "front_hip", "back_foot", "front_foot"),
-        )
+        ascent = legs.flight("ascent", xa, top, "lifted off falling: no apex", (pd, pd))
         return (descent, stance, ascent), section

@@ -58,14 +58,22 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..hybrid import Phase, Section, Symbols, Transition
-from ..parameters import parameter
 from .blocks import apex, ballistic_flow, fall
-from .planar_quadruped import _FLIGHT, _hips, _QuadrupedBase
+from .planar_quadruped import _FLIGHT, POINT_NAMES, _drawing, _hips, _QuadrupedBase
+from .raibert_hopper import (
+    attitude_damping_parameter,
+    attitude_gain_parameter,
+    desired_speed_parameter,
+    leg_loss_parameter,
+    speed_gain_parameter,
+    thrust_parameter,
+)
 
 __all__ = ["PlanarQuadrupedRaibert", "touchdown_angle_law"]
 
 _RCB = "Raibert, Chepponis & Brown 1986, 'Running on four legs as though they were one'"
 _RAIBERT = "Raibert 1986, Legged Robots That Balance"
+_SERVO = _RCB + " (pitch servoed in stance); value chosen for a stable bound"
 #: Largest |x_f| / l0 the foot-placement law may ask for (the leg stays below the hip).
 _MAX_REACH = 0.95
 
@@ -185,26 +193,28 @@ class _Legs:
             source="the gait's phase sequence (Poulakakis et al. 2006, Fig. 2)",
         )
 
+    def apex(self, x):
+        """The top of the flight, ``ż = 0`` falling; ``x`` is measured from there on."""
+        return apex(
+            self.sym,
+            x,
+            x[4],  # ż = 0, falling
+            ca.vertcat(0, x[1:6]),  # x measured from the apex
+            doc="top of the flight, ż = 0 falling; x is measured from here on",
+        )
+
     def falls(self, x, hips, doc):
         return fall(
             self.sym, x, "falls (a hip reaches the ground)", ca.fmin(hips[0][1], hips[1][1]), doc
         )
 
     def points(self, x, back_foot=None, front_foot=None):
-        back, front = self.hips(x)
-        cols = [ca.vertcat(back[0], back[1]), ca.vertcat(front[0], front[1])]
-        th = self.angle(x)
-        for hip, foot in ((back, back_foot), (front, front_foot)):
-            if foot is None:
-                cols.append(
-                    ca.vertcat(hip[0] + self.l0 * ca.sin(th), hip[1] - self.l0 * ca.cos(th))
-                )
-            else:
-                cols.append(ca.vertcat(foot, 0))
-        return ca.Function("points", [x, self.sym.p], [ca.horzcat(*cols)])
+        hips, th = self.hips(x), self.angle(x)
+        feet = [(hips[0], back_foot, th), (hips[1], front_foot, th)]
+        return _drawing(self.sym, x, hips, self.l0, feet)
 
 
-_NAMES = ("back_hip", "front_hip", "back_foot", "front_foot")
+_NAMES = POINT_NAMES
 
 
 @dataclass(frozen=True)
@@ -223,57 +233,25 @@ class PlanarQuadrupedRaibert(_QuadrupedBase):
     declared_coordinates = ("z", "phi", "x_dot", "phi_dot")
     declared_section_doc = "apex: z_dot = 0, x = 0"
 
-    damping: float = parameter(
+    damping: float = leg_loss_parameter(
         20.0,
-        unit="N s/m",
-        doc="leg viscous loss c (damping ratio c/(2 sqrt(k m_h)) = 0.055, m_h = m I/(I + m L²))",
-        source="a lightly damped leg, as raibert_hopper's (Raibert 1986 §2.2)",
-        low=0.0,
-        high=1e5,
+        "leg viscous loss c (damping ratio c/(2 sqrt(k m_h)) = 0.055, m_h = m I/(I + m L²))",
+        "a lightly damped leg, as raibert_hopper's (Raibert 1986 §2.2)",
     )
-    thrust: float = parameter(
+    thrust: float = thrust_parameter(
         0.06,
-        unit="m",
-        doc="thrust δ: a stance leg's rest length is l0 + δ (height control)",
-        source="chosen: ½ k δ² = 6.3 J a stance; with the default loss and gains the bound "
+        "thrust δ: a stance leg's rest length is l0 + δ (height control)",
+        "chosen: ½ k δ² = 6.3 J a stance; with the default loss and gains the bound "
         "settles at a 0.38 m apex (found by simulating 40 strides, then solved)",
-        low=0.0,
-        high=1.0,
     )
-    desired_speed: float = parameter(
-        1.0,
-        unit="m/s",
-        doc="desired forward speed ẋ_d of the foot-placement law",
-        source="chosen: of the passive bounds' speeds, 0–1.12 m/s (problems/planar_quadruped.py)",
-        low=-10.0,
-        high=10.0,
+    desired_speed: float = desired_speed_parameter(
+        "chosen: of the passive bounds' speeds, 0–1.12 m/s (problems/planar_quadruped.py)"
     )
-    k_speed: float = parameter(
-        0.08,
-        unit="s",
-        doc="speed gain k_ẋ of the foot-placement law x_f = ẋ T_s/2 + k_ẋ (ẋ − ẋ_d)",
-        source=_RAIBERT + ", §2.3 (gains of a few hundredths of a second)",
-        low=0.0,
-        high=1.0,
-        low_open=True,
+    k_speed: float = speed_gain_parameter(
+        0.08, _RAIBERT + ", §2.3 (gains of a few hundredths of a second)", low=0.0
     )
-    k_attitude: float = parameter(
-        20.0,
-        unit="N m/rad",
-        doc="proportional gain k_p of the stance attitude servo τ = −k_p φ − k_v φ̇",
-        source=_RCB + " (pitch servoed in stance); value chosen for a stable bound",
-        low=0.0,
-        high=1e5,
-        low_open=True,
-    )
-    d_attitude: float = parameter(
-        2.0,
-        unit="N m s/rad",
-        doc="derivative gain k_v of the stance attitude servo",
-        source=_RCB + " (pitch servoed in stance); value chosen for a stable bound",
-        low=0.0,
-        high=1e5,
-    )
+    k_attitude: float = attitude_gain_parameter(20.0, _SERVO, positive=True)
+    d_attitude: float = attitude_damping_parameter(2.0, _SERVO)
 
     def check(self) -> None:
         if self.thrust == 0 and self.damping == 0:
@@ -401,14 +379,7 @@ class PlanarQuadrupedRaibert(_QuadrupedBase):
             ),
         )
         xa = _flight()
-        top = apex(
-            sym,
-            xa,
-            xa[4],  # ż = 0, falling
-            ca.vertcat(0, xa[1:6]),  # x measured from the apex
-            doc="top of the flight, ż = 0 falling; x is measured from here on",
-        )
-        ascent = flight_phase("ascent", xa, top)
+        ascent = flight_phase("ascent", xa, legs.apex(xa))
         s = ca.SX.sym("s", 4)
         section = Section(
             ("z", "phi", "x_dot", "phi_dot"),

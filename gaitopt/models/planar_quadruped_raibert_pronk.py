@@ -27,10 +27,9 @@ from dataclasses import dataclass
 import casadi as ca
 
 from ..hybrid import Phase, Section, Symbols, Transition
-from ..parameters import parameter
-from .blocks import apex
 from .planar_quadruped import _FLIGHT
 from .planar_quadruped_raibert import _NAMES, _RAIBERT, PlanarQuadrupedRaibert, _Legs
+from .raibert_hopper import speed_gain_parameter
 
 __all__ = ["PlanarQuadrupedRaibertPronk"]
 
@@ -47,15 +46,11 @@ class PlanarQuadrupedRaibertPronk(PlanarQuadrupedRaibert):
     declared_coordinates = ("z", "x_dot")
     declared_section_doc = "pitch-free apex: z_dot = 0, x = 0, phi = phi_dot = 0"
 
-    k_speed: float = parameter(
+    k_speed: float = speed_gain_parameter(
         0.03,
-        unit="s",
-        doc="speed gain k_ẋ of the foot-placement law x_f = ẋ T_s/2 + k_ẋ (ẋ − ẋ_d)",
-        source=_RAIBERT + ", §2.3; chosen below the pronk's period doubling near k_ẋ = 0.042 s "
+        _RAIBERT + ", §2.3; chosen below the pronk's period doubling near k_ẋ = 0.042 s "
         "(problems/planar_quadruped_raibert.py)",
         low=0.0,
-        high=1.0,
-        low_open=True,
     )
 
     @staticmethod
@@ -131,13 +126,7 @@ class PlanarQuadrupedRaibertPronk(PlanarQuadrupedRaibert):
         # 2 ascent → apex
         xa = Symbols.states(*_FLIGHT)[0]
         back, front = legs.hips(xa)
-        top = apex(
-            sym,
-            xa,
-            xa[4],  # ż = 0, falling
-            ca.vertcat(0, xa[1:6]),  # x measured from the apex
-            doc="top of the flight, ż = 0 falling; x is measured from here on",
-        )
+        top = legs.apex(xa)
         ascent = Phase(
             "ascent",
             _FLIGHT,

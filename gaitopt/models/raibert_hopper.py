@@ -58,7 +58,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import casadi as ca
 import numpy as np
@@ -67,6 +67,7 @@ from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import apex, ballistic_flow, fall, hip_about_foot, leg_touchdown
+from .quantities import length_parameter, mass_parameter, state_units, stiffness_parameter
 
 __all__ = ["RaibertHopper", "FLIGHT_STATES", "STANCE_STATES"]
 
@@ -78,6 +79,50 @@ STANCE_STATES = ("r", "theta", "phi", "r_dot", "theta_dot", "phi_dot")
 _DEFAULT_K_ATTITUDE = 400.0
 #: Largest |x_f| / l0 the foot-placement law may ask for (the leg stays below the hip).
 _MAX_REACH = 0.95
+
+# -- the controller's parameters, declared alike by the Raibert-controlled quadrupeds ------------
+_PLACEMENT = "of the foot-placement law x_f = ẋ T_s/2 + k_ẋ (ẋ − ẋ_d)"
+
+
+def leg_loss_parameter(default: float, doc: str, source: str) -> Any:
+    """The leg's viscous loss ``c`` (N s/m), range [0, 1e5]."""
+    return parameter(default, unit="N s/m", doc=doc, source=source, low=0.0, high=1e5)
+
+
+def thrust_parameter(default: float, doc: str, source: str) -> Any:
+    """The thrust ``δ`` (m) added to the leg's rest length in stance, range [0, 1]."""
+    return parameter(default, unit="m", doc=doc, source=source, low=0.0, high=1.0)
+
+
+def desired_speed_parameter(source: str) -> Any:
+    """The desired forward speed ``ẋ_d`` (m/s) of the foot-placement law, default 1 m/s, range
+    [−10, 10]."""
+    doc = "desired forward speed ẋ_d of the foot-placement law"
+    return parameter(1.0, unit="m/s", doc=doc, source=source, low=-10.0, high=10.0)
+
+
+def speed_gain_parameter(default: float, source: str, *, low: float = -1.0) -> Any:
+    """The speed gain ``k_ẋ`` (s) of the foot-placement law, range [low, 1] (open at 0)."""
+    return parameter(
+        default, unit="s", low=low, high=1.0, low_open=low == 0.0,
+        doc="speed gain k_ẋ " + _PLACEMENT, source=source,
+    )  # fmt: skip
+
+
+def attitude_gain_parameter(default: float, source: str, *, positive: bool = False) -> Any:
+    """The proportional gain ``k_p`` (N m/rad) of the stance attitude servo ``τ = −k_p φ −
+    k_v φ̇``, range [0, 1e5] (``k_p`` > 0 when ``positive``)."""
+    doc = "proportional gain k_p of the stance attitude servo τ = −k_p φ − k_v φ̇"
+    return parameter(
+        default, unit="N m/rad", doc=doc, source=source, low=0.0, high=1e5, low_open=positive
+    )
+
+
+def attitude_damping_parameter(default: float, source: str, note: str = "") -> Any:
+    """The derivative gain ``k_v`` (N m s/rad) of the stance attitude servo, range [0, 1e5];
+    ``note`` follows the doc."""
+    doc = "derivative gain k_v of the stance attitude servo" + note
+    return parameter(default, unit="N m s/rad", doc=doc, source=source, low=0.0, high=1e5)
 
 
 def touchdown_angle_law(sym_or_values, x_dot):
@@ -111,97 +156,45 @@ class RaibertHopper(HybridModel):
     declared_coordinates = ("z", "phi", "x_dot", "phi_dot")
     declared_section_doc = "apex: z_dot = 0, x = 0"
     drawing = (("hip", "foot"), ("tail", "nose"))  # leg and body; other points are helpers
-    state_units = {
-        "x": "m",
-        "z": "m",
-        "phi": "rad",
-        "x_dot": "m/s",
-        "z_dot": "m/s",
-        "phi_dot": "rad/s",
-        "r": "m",
-        "theta": "rad",
-        "r_dot": "m/s",
-        "theta_dot": "rad/s",
-    }  # for axis labels
+    state_units = {**state_units(x="m", z="m", phi="rad"), **state_units(r="m", theta="rad")}
     title = "Planar Raibert hopper (three-part controller)"
     reference = "Raibert 1986; Raibert, Brown & Chepponis 1984"
     mesh = (4, 4)
     max_phase_time: ClassVar[float] = 5.0
 
-    mass: float = parameter(
-        10.0, unit="kg", doc="body mass M", source=_SIZE, low=0.0, high=1e4, low_open=True
-    )
+    mass: float = mass_parameter(10.0, "body mass M", _SIZE)
     inertia: float = parameter(
-        0.5,
-        unit="kg m^2",
-        doc="body pitch inertia J about its centre of mass (at the hip)",
-        source=_SIZE,
-        low=0.0,
-        high=1e4,
-        low_open=True,
-    )
-    rest_length: float = parameter(
-        0.5, unit="m", doc="leg rest length l0 in flight", source=_SIZE, low=0.0, high=10.0,
-        low_open=True,
+        0.5, unit="kg m^2", low=0.0, high=1e4, low_open=True,
+        doc="body pitch inertia J about its centre of mass (at the hip)", source=_SIZE,
     )  # fmt: skip
-    stiffness: float = parameter(
+    rest_length: float = length_parameter(0.5, "leg rest length l0 in flight", _SIZE)
+    stiffness: float = stiffness_parameter(
         4000.0,
-        unit="N/m",
-        doc="leg spring stiffness k (k l0/(M g) = 20.4; expected stance time π sqrt(M/k) = "
-        "0.157 s)",
-        source=_SIZE,
-        low=0.0,
-        high=1e7,
-        low_open=True,
+        ("leg spring stiffness k (k l0/(M g) = 20.4; expected stance time π sqrt(M/k) = 0.157 s)"),
+        _SIZE,
     )
-    damping: float = parameter(
+    damping: float = leg_loss_parameter(
         20.0,
-        unit="N s/m",
-        doc="leg viscous loss c (damping ratio c/(2 sqrt(k M)) = 0.05)",
-        source="a lightly damped leg (the air spring's losses, Raibert 1986 §2.2)",
-        low=0.0,
-        high=1e5,
+        "leg viscous loss c (damping ratio c/(2 sqrt(k M)) = 0.05)",
+        "a lightly damped leg (the air spring's losses, Raibert 1986 §2.2)",
     )
-    thrust: float = parameter(
+    thrust: float = thrust_parameter(
         0.04,
-        unit="m",
-        doc="thrust δ: the leg's rest length in stance is l0 + δ (height control)",
-        source="sets the hop: ½ k δ² = 3.2 J a hop balances the leg's loss near a 0.1 m hop",
-        low=0.0,
-        high=1.0,
+        "thrust δ: the leg's rest length in stance is l0 + δ (height control)",
+        "sets the hop: ½ k δ² = 3.2 J a hop balances the leg's loss near a 0.1 m hop",
     )
-    desired_speed: float = parameter(
-        1.0,
-        unit="m/s",
-        doc="desired forward speed ẋ_d of the foot-placement law",
-        source="a brisk hop for this size (Raibert's machines ran at 0.5–2 m/s)",
-        low=-10.0,
-        high=10.0,
+    desired_speed: float = desired_speed_parameter(
+        "a brisk hop for this size (Raibert's machines ran at 0.5–2 m/s)"
     )
-    k_speed: float = parameter(
-        0.05,
-        unit="s",
-        doc="speed gain k_ẋ of the foot-placement law x_f = ẋ T_s/2 + k_ẋ (ẋ − ẋ_d)",
-        source=_RAIBERT + ", §2.3 (gains of a few hundredths of a second)",
-        low=-1.0,
-        high=1.0,
+    k_speed: float = speed_gain_parameter(
+        0.05, _RAIBERT + ", §2.3 (gains of a few hundredths of a second)"
     )
-    k_attitude: float = parameter(
+    k_attitude: float = attitude_gain_parameter(
         _DEFAULT_K_ATTITUDE,
-        unit="N m/rad",
-        doc="proportional gain k_p of the stance attitude servo τ = −k_p φ − k_v φ̇",
-        source="sqrt(k_p/J) = 28 rad/s: the servo settles within a stance (ω T_s = 4.4)",
-        low=0.0,
-        high=1e5,
+        "sqrt(k_p/J) = 28 rad/s: the servo settles within a stance (ω T_s = 4.4)",
     )
-    d_attitude: float = parameter(
-        20.0,
-        unit="N m s/rad",
-        doc="derivative gain k_v of the stance attitude servo (damping ratio k_v/(2 sqrt(k_p J)) "
-        "= 0.71)",
-        source="a well-damped servo",
-        low=0.0,
-        high=1e5,
+    d_attitude: float = attitude_damping_parameter(
+        20.0, "a well-damped servo", " (damping ratio k_v/(2 sqrt(k_p J)) = 0.71)"
     )
     gravity: float = gravity_parameter()
 

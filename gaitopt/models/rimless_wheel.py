@@ -38,6 +38,7 @@ import numpy as np
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..mechanics import bodies_function
 from ..parameters import gravity_parameter, parameter
+from .quantities import length_parameter, slope_parameter
 
 __all__ = ["RimlessWheel"]
 
@@ -59,31 +60,17 @@ class RimlessWheel(HybridModel):
     state_units = {"theta": "rad", "theta_dot": "rad/s"}
 
     spokes: float = parameter(
-        8,
-        unit="1",
-        doc="number of spokes",
-        source="Drake RimlessWheel default",
-        low=3,
-        high=64,
-        integer=True,
-    )
-    length: float = parameter(
-        1.0,
-        unit="m",
-        doc="spoke length l",
-        source="Drake RimlessWheel default",
-        low=0.0,
-        high=100.0,
-        low_open=True,
+        8, unit="1", low=3, high=64, integer=True,
+        doc="number of spokes", source="Drake RimlessWheel default",
+    )  # fmt: skip
+    length: float = length_parameter(
+        1.0, "spoke length l", "Drake RimlessWheel default", high=100.0
     )
     gravity: float = gravity_parameter()
-    slope: float = parameter(
+    slope: float = slope_parameter(
         0.08,
-        unit="rad",
-        doc="ground slope γ (downhill positive)",
-        source="Drake RimlessWheel default: produces standing and rolling fixed points",
-        low=0.0,
-        high=1.0,
+        "Drake RimlessWheel default: produces standing and rolling fixed points",
+        (0.0, 1.0),
         high_open=True,
     )
 

@@ -51,6 +51,7 @@ import numpy as np
 
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import parameter
+from .quantities import slope_parameter
 
 __all__ = ["SimplestWalker"]
 
@@ -82,13 +83,11 @@ class SimplestWalker(HybridModel):
     #: The trailing leg can only push (Kuo 2002's push-off impulse is P ≥ 0).
     input_bounds: ClassVar[dict[str, tuple[float, float]]] = {"push_off": (0.0, float("inf"))}
 
-    slope: float = parameter(
+    slope: float = slope_parameter(
         0.009,
-        unit="rad",
+        "Garcia et al. 1998, the slope of their tabulated gaits",
+        (0.0, 0.05),
         doc="ground slope γ",
-        source="Garcia et al. 1998, the slope of their tabulated gaits",
-        low=0.0,
-        high=0.05,
     )
 
     # Range: the long-step gait exists at the default slope over all of it (solved and verified
@@ -96,13 +95,10 @@ class SimplestWalker(HybridModel):
     # moves to steeper slopes with k (problems/simplest_walker_pd_curve.py) and leaves the
     # slope range (0.05 rad) near k ≈ 0.685.
     hip_stiffness: float = parameter(
-        0.0,
-        unit="m_f*g*l/rad",
+        0.0, unit="m_f*g*l/rad", low=0.0, high=10.0,
         doc="hip spring stiffness k (Kuo 2002), scaled by the foot mass",
         source="Garcia et al. 1998: none (0); Kuo 2002 adds it to tune the step frequency",
-        low=0.0,
-        high=10.0,
-    )
+    )  # fmt: skip
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:

@@ -52,9 +52,11 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ParameterError
-from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
+from ..hybrid import HybridModel, Phase, Section, Symbols
 from ..parameters import gravity_parameter, parameter
-from .blocks import apex, ballistic_flow, fall, hip_about_foot, leg_touchdown
+from .blocks import apex, ballistic_flow, fall, leg_touchdown
+from .polar import UNITS, leg_in_flight, spring_stance
+from .quantities import energy_parameter, length_parameter, mass_parameter, stiffness_parameter
 
 __all__ = ["Slip", "SlipSwingLeg", "SWING_LAW_DEGREE"]
 
@@ -101,108 +103,18 @@ def _build(sym: Symbols, angle_law) -> tuple[tuple[Phase, ...], Section]:
         "fires only if touchdown never armed: the apex was below h + l0·cos θ_td",
     )
     flight_energy = sym.conserved("energy", xf, 0.5 * m * (x_dot**2 + z_dot**2) + m * g * z)
-    descent_points = ca.Function(
-        "points",
-        [xf, sym.p],
-        [
-            ca.horzcat(
-                ca.vertcat(x, z),
-                ca.vertcat(x + l0 * ca.sin(drawn_angle), z - l0 * ca.cos(drawn_angle)),
-                ca.vertcat(x, 0),
-            )
-        ],
-    )
     descent = Phase(
         "descent",
         ("x", "z", "x_dot", "z_dot"),
         ballistic,
         (touchdown, no_touchdown),
         {"energy": flight_energy},
-        points=descent_points,
+        points=leg_in_flight(sym, xf, l0, drawn_angle),
         point_names=("hip", "foot", "origin"),
     )
 
-    # -- stance: polar coordinates about the foot ------------------------------------------------
-    xs, (r, th, r_dot, th_dot) = sym.states("r", "theta", "r_dot", "theta_dot")
-    stance_flow = sym.function(
-        "flow",
-        xs,
-        ca.vertcat(
-            r_dot,
-            th_dot,
-            r * th_dot**2 - g * ca.cos(th) + k / m * (l0 - r),
-            (g * ca.sin(th) - 2 * r_dot * th_dot) / r,
-        ),
-    )
-    hip_x, hip_above_foot, hip_xd, hip_zd = hip_about_foot(r, th, r_dot, th_dot)
-    hip_z = h + hip_above_foot
-    to_flight = ca.vertcat(hip_x, hip_z, hip_xd, hip_zd)
-    liftoff = Transition(
-        name="liftoff",
-        guard=sym.function("guard", xs, r - l0),  # r = l0, extending
-        direction=+1,
-        reset=sym.function("reset", xs, to_flight),
-        target=2,
-        admissible=sym.function("admissible", xs, hip_xd),  # moving forwards
-        impact=False,
-        doc="the spring regains its rest length, r = l0, extending, moving forwards; Cartesian "
-        "flight state with x from the foot",
-    )
-    backwards = fall(
-        sym,
-        xs,
-        "falls back (lifts off moving backwards)",
-        r - l0,
-        "liftoff with the hip moving backwards: too little forward energy",
-        direction=+1,
-        admissible=-hip_xd,
-    )
-    stops = fall(
-        sym,
-        xs,
-        "falls back (stance leg stops rotating)",
-        th_dot,
-        "θ̇ falls through 0 in stance: too little forward energy to vault over the foot",
-    )
-    collapses = fall(
-        sym,
-        xs,
-        "falls (hip reaches the ground in stance)",
-        hip_above_foot,
-        "the hip reaches the foot's level",
-    )
-    stance_energy = sym.conserved(
-        "energy",
-        xs,
-        0.5 * m * (r_dot**2 + r**2 * th_dot**2) + m * g * hip_z + 0.5 * k * (l0 - r) ** 2,
-    )
-    stance_points = ca.Function(
-        "points",
-        [xs, sym.p],
-        [ca.horzcat(ca.vertcat(hip_x, hip_above_foot), ca.DM.zeros(2, 1))],
-    )
-    # The massless spring leg can only push: its force k (l0 − r) ≥ 0 (zero at touchdown and
-    # at liftoff, where r = l0: it must compress at once after touchdown).
-    compressed = sym.constraint(
-        "leg force compressive",
-        xs,
-        k * (l0 - r),
-        "leg pulls",
-        at_start=True,
-        at_end=True,
-        unit="N",
-        source="a massless spring leg on the ground can only push (Blickhan 1989)",
-    )
-    stance = Phase(
-        "stance",
-        ("r", "theta", "r_dot", "theta_dot"),
-        stance_flow,
-        (liftoff, backwards, stops, collapses),
-        {"energy": stance_energy},
-        points=stance_points,
-        point_names=("hip", "foot"),
-        constraints=(compressed,),
-    )
+    # -- stance: polar coordinates about the foot (Tedrake's stance equations) -----------------
+    stance = spring_stance(sym, stiffness=k, rest_length=l0, target=2, ground=h)
 
     # -- flight: ascent to the apex ------------------------------------------------------------
     top = apex(
@@ -220,24 +132,13 @@ def _build(sym: Symbols, angle_law) -> tuple[tuple[Phase, ...], Section]:
         z - h,
         "lifted off falling: the hip reaches the ground before any apex",
     )
-    ascent_points = ca.Function(
-        "points",
-        [xf, sym.p],
-        [
-            ca.horzcat(
-                ca.vertcat(x, z - h),
-                ca.vertcat(x + l0 * ca.sin(drawn_angle), z - h - l0 * ca.cos(drawn_angle)),
-                ca.vertcat(x, -h),
-            )
-        ],
-    )
     ascent = Phase(
         "ascent",
         ("x", "z", "x_dot", "z_dot"),
         ballistic,
         (top, no_apex),
         {"energy": flight_energy},
-        points=ascent_points,
+        points=leg_in_flight(sym, xf, l0, drawn_angle, ground=h),
         point_names=("hip", "foot", "below_hip"),
     )
 
@@ -263,16 +164,7 @@ class Slip(HybridModel):
     declared_coordinates = ("z",)
     declared_section_doc = "apex: z_dot = 0, x = 0, x_dot = sqrt(2 (energy/mass − gravity·z))"
     drawing = (("hip", "foot"),)  # leg and body; other points are helpers
-    state_units = {
-        "x": "m",
-        "z": "m",
-        "x_dot": "m/s",
-        "z_dot": "m/s",
-        "r": "m",
-        "theta": "rad",
-        "r_dot": "m/s",
-        "theta_dot": "rad/s",
-    }  # for axis labels
+    state_units = UNITS  # for axis labels
     title = "Spring-loaded inverted pendulum (SLIP)"
     reference = "Blickhan 1989; Geyer et al. 2005; Tedrake, Underactuated Robotics"
     inputs = ("touchdown_angle",)
@@ -284,48 +176,27 @@ class Slip(HybridModel):
     #: (step-to-step controllers keep to it).
     input_bounds: ClassVar[dict[str, tuple[float, float]]] = {"touchdown_angle": (0.0, math.pi / 2)}
 
-    mass: float = parameter(
-        _M, unit="kg", doc="body mass m", source=_TEDRAKE, low=0.0, high=1e4, low_open=True
-    )
-    rest_length: float = parameter(
-        _L0, unit="m", doc="leg rest length l0", source=_TEDRAKE, low=0.0, high=10.0, low_open=True
-    )
-    stiffness: float = parameter(
-        8397.36,
-        unit="N/m",
-        doc="leg stiffness k (k̃ = k l0/(m g) = 10.7 at the defaults)",
-        source=_TEDRAKE + ": k̃ = 10.7",
-        low=0.0,
-        high=1e7,
-        low_open=True,
+    mass: float = mass_parameter(_M, "body mass m", _TEDRAKE)
+    rest_length: float = length_parameter(_L0, "leg rest length l0", _TEDRAKE)
+    stiffness: float = stiffness_parameter(
+        8397.36, "leg stiffness k (k̃ = k l0/(m g) = 10.7 at the defaults)", _TEDRAKE + ": k̃ = 10.7"
     )
     touchdown_angle: float = parameter(
-        math.pi / 6,
-        unit="rad",
+        math.pi / 6, unit="rad", low=0.0, high=math.pi / 2, high_open=True,
         doc="nominal touchdown angle θ_td from vertical (the per-step input's default)",
         source=_TEDRAKE + ": 30°",
-        low=0.0,
-        high=math.pi / 2,
-        high_open=True,
-    )
+    )  # fmt: skip
     gravity: float = gravity_parameter()
-    energy: float = parameter(
+    energy: float = energy_parameter(
         1263.528,
-        unit="J",
-        doc="total energy E = ½ m v² + m g z (Ẽ = E/(m g l0) = 1.61 at the defaults)",
-        source=_TEDRAKE + ": Ẽ = 1.61",
-        low=0.0,
-        high=1e8,
-        low_open=True,
+        "total energy E = ½ m v² + m g z (Ẽ = E/(m g l0) = 1.61 at the defaults)",
+        _TEDRAKE + ": Ẽ = 1.61",
     )
     ground_height: float = parameter(
-        0.0,
-        unit="m",
+        0.0, unit="m", low=-10.0, high=10.0,
         doc="height h of the ground under the next touchdown (rough terrain: changes per step)",
         source="level ground",
-        low=-10.0,
-        high=10.0,
-    )
+    )  # fmt: skip
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:

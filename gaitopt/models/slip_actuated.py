@@ -52,93 +52,21 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ParameterError
-from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
-from ..parameters import gravity_parameter, parameter
-from .blocks import ballistic_flow, fall, hip_about_foot
+from ..hybrid import Constraint, HybridModel, Phase, Section, Symbols
+from ..parameters import gravity_parameter
+from .polar import STANCE, UNITS, flight_to_foothold, foot_stance, leg_power, liftoff
+from .quantities import energy_parameter, length_parameter, mass_parameter, stiffness_parameter
 
 __all__ = ["SlipActuated"]
 
 _TEDRAKE = "Tedrake, Underactuated Robotics, SLIP apex map (after Geyer 2005), as model slip"
-_STANCE = ("r", "theta", "r_dot", "theta_dot")
-_FLIGHT = ("x", "z", "x_dot", "z_dot")
+_WORK_ENERGY = "periodic orbit at the section's energy (the work–energy theorem)"
 #: The stride (m) of the passive SLIP gait at the slip model's defaults: apex-to-apex distance
 #: of ``gaitopt.find_limit_cycle(gaitopt.model("slip"), {"z": 0.87})`` (1.35576453 m).
 SLIP_STRIDE = 1.3557645310670494
 #: Relative margin of the flight's energy about ``energy`` (module docstring, "Closing the
 #: orbit").
 ENERGY_MARGIN = 1e-8
-
-
-def _stance(sym: Symbols, closing: Transition) -> Phase:
-    m, g, l0, k = sym.mass, sym.gravity, sym.rest_length, sym.stiffness
-    force = sym.input("leg_force")
-    xs, (r, th, r_dot, th_dot) = sym.states(*_STANCE)
-    flow = sym.function(
-        "flow",
-        xs,
-        ca.vertcat(
-            r_dot,
-            th_dot,
-            # spring k (l0 − r) and actuator F in parallel (Tedrake's stance equation + F/m)
-            r * th_dot**2 - g * ca.cos(th) + (k * (l0 - r) + force) / m,
-            (g * ca.sin(th) - 2 * r_dot * th_dot) / r,
-        ),
-    )
-    hip_x, hip_z, hip_xd, hip_zd = hip_about_foot(r, th, r_dot, th_dot)
-    energy = 0.5 * m * (r_dot**2 + r**2 * th_dot**2) + m * g * hip_z + 0.5 * k * (l0 - r) ** 2
-    constraints = (
-        sym.constraint(
-            "leg pushes",
-            xs,
-            k * (l0 - r) + force,
-            "leg pulls",
-            unit="N",
-            source="a massless leg on the ground can only push (Blickhan 1989; spring + actuator)",
-        ),
-        sym.constraint(
-            "hip above the ground",
-            xs,
-            hip_z,
-            "hip reaches the ground",
-            unit="m",
-            source="the body cannot go below the ground",
-        ),
-    )
-    falls = (
-        fall(
-            sym,
-            xs,
-            "falls back (stance leg stops rotating)",
-            th_dot,
-            "θ̇ falls through 0 in stance: too little forward energy to vault over the foot",
-        ),
-    )
-    return Phase(
-        "stance",
-        _STANCE,
-        flow,
-        (closing, *falls),
-        {"energy": sym.conserved("energy", xs, energy)},  # constant where F = 0
-        points=ca.Function(
-            "points",
-            [xs, sym.p],
-            [ca.horzcat(ca.DM.zeros(2, 1), ca.vertcat(hip_x, hip_z), _next_foot(sym))],
-        ),
-        point_names=("foot", "hip", "next_foot"),
-        bodies=ca.Function(
-            "bodies",
-            [xs, sym.p],
-            [m, ca.vertcat(hip_x, hip_z), ca.vertcat(hip_xd, hip_zd)],
-            ["x", "p"],
-            ["m", "r", "v"],
-        ),
-        constraints=constraints,
-    )
-
-
-def _next_foot(sym: Symbols) -> ca.SX:
-    """The next foothold, ``(d, 0)`` from the stance foot (m)."""
-    return ca.vertcat(sym.step_length, 0)
 
 
 @dataclass(frozen=True)
@@ -151,22 +79,13 @@ class SlipActuated(HybridModel):
     title = "SLIP with a leg force actuator (touchdown angle chosen by the optimiser)"
     reference = "Blickhan 1989; Tedrake, Underactuated Robotics; Srinivasan & Ruina 2006"
     passive_gait = True
-    declared_states = _STANCE
+    declared_states = STANCE
     declared_coordinates = ("theta", "r_dot")
     declared_section_doc = (
         "just after touchdown: r = rest_length, theta_dot from the energy "
         "(½ m (r_dot² + l0² theta_dot²) + m g l0 cos(theta) = energy)"
     )
-    state_units = {
-        "r": "m",
-        "theta": "rad",
-        "r_dot": "m/s",
-        "theta_dot": "rad/s",
-        "x": "m",
-        "z": "m",
-        "x_dot": "m/s",
-        "z_dot": "m/s",
-    }
+    state_units = UNITS
     inputs = ("leg_force",)
     input_units = ("N",)
     input_bounds: ClassVar[dict[str, tuple[float, float]]] = {
@@ -175,133 +94,80 @@ class SlipActuated(HybridModel):
     drawing = (("foot", "hip"),)
     max_phase_time: ClassVar[float] = 5.0
 
-    mass: float = parameter(
-        80.0, unit="kg", doc="body mass m", source=_TEDRAKE, low=0.0, high=1e4, low_open=True
+    mass: float = mass_parameter(80.0, "body mass m", _TEDRAKE)
+    rest_length: float = length_parameter(1.0, "leg rest length l0", _TEDRAKE)
+    stiffness: float = stiffness_parameter(
+        8397.36, "leg stiffness k (k̃ = k l0/(m g) = 10.7 at the defaults)", _TEDRAKE + ": k̃ = 10.7"
     )
-    rest_length: float = parameter(
-        1.0, unit="m", doc="leg rest length l0", source=_TEDRAKE, low=0.0, high=10.0, low_open=True
-    )
-    stiffness: float = parameter(
-        8397.36,
-        unit="N/m",
-        doc="leg stiffness k (k̃ = k l0/(m g) = 10.7 at the defaults)",
-        source=_TEDRAKE + ": k̃ = 10.7",
-        low=0.0,
-        high=1e7,
-        low_open=True,
-    )
-    energy: float = parameter(
+    energy: float = energy_parameter(
         1263.528,
-        unit="J",
-        doc="total energy E at touchdown (Ẽ = E/(m g l0) = 1.61 at the defaults)",
-        source=_TEDRAKE + ": Ẽ = 1.61",
-        low=0.0,
-        high=1e8,
-        low_open=True,
+        "total energy E at touchdown (Ẽ = E/(m g l0) = 1.61 at the defaults)",
+        _TEDRAKE + ": Ẽ = 1.61",
     )
-    step_length: float = parameter(
+    step_length: float = length_parameter(
         SLIP_STRIDE,
-        unit="m",
-        doc="stride d, foot to foot (free it to optimise it: free=('step_length',))",
-        source="the passive SLIP gait's stride at the slip model's defaults (θ_td = 30°)",
-        low=0.0,
+        "stride d, foot to foot (free it to optimise it: free=('step_length',))",
+        "the passive SLIP gait's stride at the slip model's defaults (θ_td = 30°)",
         high=20.0,
-        low_open=True,
     )
     gravity: float = gravity_parameter()
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
-        l0, d, g, m, E = sym.rest_length, sym.step_length, sym.gravity, sym.mass, sym.energy
-        xs, (r, th, r_dot, th_dot) = sym.states(*_STANCE)
-        hx, hz, hxd, hzd = hip_about_foot(r, th, r_dot, th_dot)
-        liftoff = Transition(
+        l0, g, m, E, k = sym.rest_length, sym.gravity, sym.mass, sym.energy, sym.stiffness
+        force = sym.input("leg_force")
+        lift = liftoff(
+            sym,
+            sym.states(*STANCE)[0],
+            l0,
             name="lift-off",
-            guard=sym.function("guard", xs, r - l0),
-            direction=+1,
-            reset=sym.function("reset", xs, ca.vertcat(hx, hz, hxd, hzd)),
             target=1,
-            admissible=sym.function("admissible", xs, hxd),  # moving forwards
-            impact=False,
             doc="the leg regains its rest length, r = l0, extending; Cartesian flight state "
             "with x from the stance foot",
         )
-        stance = _stance(sym, liftoff)
-
-        xf, (x, z, x_dot, z_dot) = sym.states(*_FLIGHT)
-        dx = x - d
-        dist2 = dx**2 + z**2
-        rr = ca.sqrt(dist2)
-        touchdown = Transition(
-            name="touchdown",
-            guard=sym.function("guard", xf, l0**2 - dist2),
-            direction=+1,
-            reset=sym.function(
-                "reset",
-                xf,
-                ca.vertcat(
-                    rr,
-                    ca.atan2(dx, z),
-                    (dx * x_dot + z * z_dot) / rr,
-                    (z * x_dot - dx * z_dot) / dist2,
-                ),
+        stance = foot_stance(
+            sym,
+            lift,
+            # spring k (l0 − r) and actuator F in parallel (Tedrake's stance equation + F/m)
+            leg_force=lambda r: k * (l0 - r) + force,
+            push_source="a massless leg on the ground can only push (Blickhan 1989; spring + "
+            "actuator)",
+            falls_back=(
+                "falls back (stance leg stops rotating)",
+                "θ̇ falls through 0 in stance: too little forward energy to vault over the foot",
             ),
-            target=0,
-            admissible=sym.function("admissible", xf, z),  # the hip above the new foot's level
-            impact=False,  # a massless leg at rest length: the velocity is only re-expressed
-            foothold="next_foot",
+            spring_energy=lambda r: 0.5 * k * (l0 - r) ** 2,
+        )
+
+        # The flight's (constant) energy is the parameter E, so the touchdown that closes the
+        # stride has the section's energy: with theta and r_dot periodic, theta_dot is too
+        # (module docstring, "Closing the orbit").  Two one-sided conditions.
+        def at_least(xf: ca.SX, energy: ca.SX) -> Constraint:
+            return sym.constraint(
+                "flight energy at least energy",
+                xf,
+                energy - E * (1 - ENERGY_MARGIN),
+                "the stride lost energy (not periodic at this energy)",
+                unit="J",
+                source=_WORK_ENERGY,
+            )
+
+        def at_most(xf: ca.SX, energy: ca.SX) -> Constraint:
+            return sym.constraint(
+                "flight energy at most energy",
+                xf,
+                E * (1 + ENERGY_MARGIN) - energy,
+                "the stride gained energy (not periodic at this energy)",
+                unit="J",
+                source=_WORK_ENERGY,
+            )
+
+        flight = flight_to_foothold(
+            sym,
+            l0,
             doc="the hip comes within l0 of the next foothold (x = d): (x − d)² + z² = l0², "
             "approaching; polar state about the new foot",
-        )
-        flight_energy = 0.5 * m * (x_dot**2 + z_dot**2) + m * g * z
-        flight = Phase(
-            "flight",
-            _FLIGHT,
-            ballistic_flow(sym, xf, g, vertical=1),
-            (touchdown, fall(sym, xf, "falls (hip reaches the ground in flight)", z, "z = 0")),
-            {"energy": sym.conserved("energy", xf, flight_energy)},
-            points=ca.Function(
-                "points",
-                [xf, sym.p],
-                [ca.horzcat(ca.DM.zeros(2, 1), ca.vertcat(x, z), _next_foot(sym))],
-            ),
-            point_names=("foot", "hip", "next_foot"),
-            bodies=ca.Function(
-                "bodies",
-                [xf, sym.p],
-                [m, ca.vertcat(x, z), ca.vertcat(x_dot, z_dot)],
-                ["x", "p"],
-                ["m", "r", "v"],
-            ),
-            constraints=(
-                sym.constraint(
-                    "hip above the ground",
-                    xf,
-                    z,
-                    "hip reaches the ground",
-                    unit="m",
-                    source="the body cannot go below the ground",
-                ),
-                # The flight's (constant) energy is the parameter E, so the touchdown that closes
-                # the stride has the section's energy: with theta and r_dot periodic, theta_dot
-                # is too (module docstring, "Closing the orbit").  Two one-sided conditions.
-                sym.constraint(
-                    "flight energy at least energy",
-                    xf,
-                    flight_energy - E * (1 - ENERGY_MARGIN),
-                    "the stride lost energy (not periodic at this energy)",
-                    unit="J",
-                    source="periodic orbit at the section's energy (the work–energy theorem)",
-                ),
-                sym.constraint(
-                    "flight energy at most energy",
-                    xf,
-                    E * (1 + ENERGY_MARGIN) - flight_energy,
-                    "the stride gained energy (not periodic at this energy)",
-                    unit="J",
-                    source="periodic orbit at the section's energy (the work–energy theorem)",
-                ),
-            ),
+            conditions=(at_least, at_most),
         )
         s, (sth, sr_dot) = sym.states("theta", "r_dot")
         # E = ½ m (ṙ² + l0² θ̇²) + m g l0 cos θ at touchdown (no spring energy at r = l0)
@@ -335,7 +201,4 @@ class SlipActuated(HybridModel):
 
     def input_rates(self, phase: int) -> ca.Function:
         """The actuator does the power ``F ṙ`` (W) in stance and none in flight."""
-        x = ca.SX.sym("x", 4)
-        p = ca.SX.sym("p", len(self.parameter_specs()))
-        rate = x[2] if phase == 0 else ca.SX(0)
-        return ca.Function("input_rates", [x, p], [rate], ["x", "p"], ["rates"])
+        return leg_power(len(self.parameter_specs()), stance=phase == 0)

@@ -53,6 +53,7 @@ import numpy as np
 
 from ..hybrid import Constraint, HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
+from .quantities import slope_parameter
 
 __all__ = ["Strandbeest", "contact_sequence", "RODS"]
 
@@ -356,32 +357,22 @@ class Strandbeest(HybridModel):
         )
     )
 
-    slope: float = parameter(
+    slope: float = slope_parameter(
         0.02,
-        unit="rad",
+        "chosen: the machine rolls down it passively",
+        (-0.5, 0.5),
         doc="ground slope γ (downhill positive, towards −x)",
-        source="chosen: the machine rolls down it passively",
-        low=-0.5,
-        high=0.5,
     )
     torque: float = parameter(
-        0.0,
-        unit="N*m",
-        doc="constant crank torque τ (driving the crank forward)",
-        source="passive by default",
-        low=-1000.0,
-        high=1000.0,
-    )
+        0.0, unit="N*m", low=-1000.0, high=1000.0,
+        doc="constant crank torque τ (driving the crank forward)", source="passive by default",
+    )  # fmt: skip
     gravity: float = gravity_parameter()
     density: float = parameter(
-        _DENSITY,
-        unit="kg/m",
+        _DENSITY, unit="kg/m", low=0.0, high=100.0, low_open=True,
         doc="linear density of the links (uniform rods)",
         source="Deits' PVC pipe, Drake examples/multibody/strandbeest (0.476212462 kg/m)",
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+    )  # fmt: skip
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:

@@ -102,8 +102,9 @@ import numpy as np
 
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..mechanics import bodies_function, contact_force, impact_velocity, solve_small
-from ..parameters import parameter
+from ..parameters import gravity_parameter, parameter
 from .blocks import fall
+from .quantities import length_parameter, mass_parameter, state_units
 
 __all__ = ["ThreeLinkWalker"]
 
@@ -125,12 +126,12 @@ OUTPUT_MATRIX = ((0.0, 0.0, 1.0), (1.0, 1.0, 0.0))
 
 def _mass(value: float, doc: str) -> Any:
     """A point mass (kg, in (0, 1e4]) from Grizzle et al. 2001."""
-    return parameter(value, unit="kg", doc=doc, source=_GRIZZLE, low=0.0, high=1e4, low_open=True)
+    return mass_parameter(value, doc, _GRIZZLE)
 
 
 def _length(value: float, doc: str) -> Any:
     """A length (m, in (0, 10]) from Grizzle et al. 2001."""
-    return parameter(value, unit="m", doc=doc, source=_GRIZZLE, low=0.0, high=10.0, low_open=True)
+    return length_parameter(value, doc, _GRIZZLE)
 
 
 def _unit(angle: ca.SX) -> ca.SX:
@@ -138,9 +139,9 @@ def _unit(angle: ca.SX) -> ca.SX:
     return ca.vertcat(ca.sin(angle), ca.cos(angle))
 
 
-def _terms(sym: Symbols, q: ca.SX, qd: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
-    """``D(q)`` (kg·m²), ``C(q, q̇)`` (kg·m²/s) and ``G(q)`` (N·m) of Grizzle et al. 2001."""
-    r, m, mh, mt, ell, g = (
+def _grizzle(sym: Symbols) -> tuple[ca.SX, ...]:
+    """Grizzle et al. 2001's ``r, m, M_H, M_T, l, g`` (m, kg, kg, kg, m, m/s²)."""
+    return (
         sym.leg_length,
         sym.mass_leg,
         sym.mass_hip,
@@ -148,6 +149,11 @@ def _terms(sym: Symbols, q: ca.SX, qd: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
         sym.torso_length,
         sym.gravity,
     )
+
+
+def _terms(sym: Symbols, q: ca.SX, qd: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
+    """``D(q)`` (kg·m²), ``C(q, q̇)`` (kg·m²/s) and ``G(q)`` (N·m) of Grizzle et al. 2001."""
+    r, m, mh, mt, ell, g = _grizzle(sym)
     c12, c13 = ca.cos(q[0] - q[1]), ca.cos(q[0] - q[2])
     s12, s13 = ca.sin(q[0] - q[1]), ca.sin(q[0] - q[2])
     D = ca.SX(3, 3)
@@ -225,14 +231,7 @@ class ThreeLinkWalker(HybridModel):
     declared_section_doc = "just after the impact: swing = impact_angle"
     title = "Three-link walker (virtual constraints, I/O linearisation)"
     reference = "Grizzle, Abba & Plestan 2001 (IEEE TAC 46(1)); issue 20"
-    state_units = {
-        "stance": "rad",
-        "swing": "rad",
-        "torso": "rad",
-        "stance_dot": "rad/s",
-        "swing_dot": "rad/s",
-        "torso_dot": "rad/s",
-    }
+    state_units = state_units(stance="rad", swing="rad", torso="rad")
     drawing = (("stance_foot", "hip", "swing_foot"), ("hip", "torso"))
     mesh = (4, 4)
     #: Names of the torques (columns of :meth:`torques`), N·m.
@@ -261,62 +260,29 @@ class ThreeLinkWalker(HybridModel):
     mass_hip: float = _mass(15.0, "hip point mass M_H")
     mass_torso: float = _mass(10.0, "torso point mass M_T")
     torso_length: float = _length(0.5, "hip to torso mass distance L")
-    gravity: float = parameter(
-        9.8,
-        unit="m/s^2",
-        doc="gravitational acceleration g",
-        source=_GRIZZLE,
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+    gravity: float = gravity_parameter(_GRIZZLE, default=9.8)
     omega_n: float = parameter(
-        5.0,
-        unit="rad/s",
-        doc="natural frequency ω_n of the output dynamics ḧ + 2ζω_n ḣ + ω_n² h = 0",
-        source=_GAINS,
-        low=0.0,
-        high=1000.0,
-        low_open=True,
-    )
+        5.0, unit="rad/s", low=0.0, high=1000.0, low_open=True,
+        doc="natural frequency ω_n of the output dynamics ḧ + 2ζω_n ḣ + ω_n² h = 0", source=_GAINS,
+    )  # fmt: skip
     zeta: float = parameter(
-        1.1,
-        unit="1",
-        doc="damping ratio ζ of the output dynamics",
-        source=_GAINS,
-        low=0.0,
-        high=100.0,
-        low_open=True,
-    )
+        1.1, unit="1", low=0.0, high=100.0, low_open=True,
+        doc="damping ratio ζ of the output dynamics", source=_GAINS,
+    )  # fmt: skip
     torso_angle: float = parameter(
-        math.pi / 8,
-        unit="rad",
-        doc="torso angle θ3d held by the first virtual constraint h1 = θ3 − θ3d",
-        source=_GRIZZLE,
-        low=-math.pi / 2,
-        high=math.pi / 2,
-        low_open=True,
-        high_open=True,
-    )
+        math.pi / 8, unit="rad", low=-math.pi / 2, high=math.pi / 2, low_open=True, high_open=True,
+        doc="torso angle θ3d held by the first virtual constraint h1 = θ3 − θ3d", source=_GRIZZLE,
+    )  # fmt: skip
     swing_offset: float = parameter(
-        0.0,
-        unit="rad",
+        0.0, unit="rad", low=-0.5, high=0.5,
         doc="offset δ of the second virtual constraint h2 = θ1 + θ2 − δ (0: the swing leg "
         "mirrors the stance leg)",
         source=_GRIZZLE,
-        low=-0.5,
-        high=0.5,
-    )
+    )  # fmt: skip
     impact_angle: float = parameter(
-        math.pi / 8,
-        unit="rad",
-        doc="stance-leg angle θ_i at the impact (θ1 = θ_i rising ends the step)",
-        source=_GRIZZLE,
-        low=0.0,
-        high=math.pi / 2,
-        low_open=True,
-        high_open=True,
-    )
+        math.pi / 8, unit="rad", low=0.0, high=math.pi / 2, low_open=True, high_open=True,
+        doc="stance-leg angle θ_i at the impact (θ1 = θ_i rising ends the step)", source=_GRIZZLE,
+    )  # fmt: skip
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
@@ -512,14 +478,7 @@ def _functions(sym, x, q, qd, loop, geo, post) -> dict[str, ca.Function]:
     """Numeric functions of the closed loop (torques, outputs, energy, power, impact)."""
     D, G = loop["D"], loop["G"]
     del G
-    r, m, mh, mt, ell, g = (
-        sym.leg_length,
-        sym.mass_leg,
-        sym.mass_hip,
-        sym.mass_torso,
-        sym.torso_length,
-        sym.gravity,
-    )
+    r, m, mh, mt, ell, g = _grizzle(sym)
     # V with ∂V/∂q = G (Grizzle et al. 2001's G is the gradient of this potential).
     V = (mh + mt + 3 * m / 2) * g * r * ca.cos(q[0]) - (m * g * r / 2) * ca.cos(q[1])
     V = V + mt * g * ell * ca.cos(q[2])

@@ -36,14 +36,9 @@ class VanDerPol(HybridModel):
     mesh = (8, 8)  # a long period (6.66 at μ = 1) with fast relaxation for large μ
 
     mu: float = parameter(
-        1.0,
-        unit="1",
-        doc="nonlinear damping μ",
-        source="Hairer, Nørsett & Wanner's reference case μ = 1",
-        low=0.0,
-        high=10.0,
-        low_open=True,
-    )
+        1.0, unit="1", low=0.0, high=10.0, low_open=True,
+        doc="nonlinear damping μ", source="Hairer, Nørsett & Wanner's reference case μ = 1",
+    )  # fmt: skip
 
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:

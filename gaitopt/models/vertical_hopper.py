@@ -79,6 +79,7 @@ from ..errors import ParameterError
 from ..hybrid import HybridModel, Phase, Section, Symbols, Transition
 from ..parameters import gravity_parameter, parameter
 from .blocks import apex, ballistic_flow, fall
+from .quantities import length_parameter, mass_parameter, state_units, stiffness_parameter
 
 __all__ = ["VerticalHopper"]
 
@@ -97,13 +98,7 @@ class VerticalHopper(HybridModel):
     declared_states = ("y", "y_dot")
     declared_coordinates = ("y",)
     declared_section_doc = "apex: y_dot = 0"
-    state_units = {
-        "y": "m",
-        "y_dot": "m/s",
-        "apex_energy": "J",
-        "dissipated": "J",
-        "delta": "m",
-    }  # for axis labels
+    state_units = {**state_units(y="m"), "apex_energy": "J", "dissipated": "J", "delta": "m"}
     title = "Vertical hopper (energy-controlled thrust)"
     reference = "Raibert 1984, 1986; Tedrake, Underactuated Robotics"
     inputs = ("thrust_offset",)
@@ -111,56 +106,32 @@ class VerticalHopper(HybridModel):
     mesh = (4, 4)
     max_phase_time: ClassVar[float] = 10.0
 
-    mass: float = parameter(
-        10.0, unit="kg", doc="body mass m", source=_CHOSEN, low=0.0, high=1e4, low_open=True
-    )
-    rest_length: float = parameter(
-        0.5, unit="m", doc="leg rest length l0", source=_CHOSEN, low=0.0, high=10.0, low_open=True
-    )
-    stiffness: float = parameter(
-        4000.0,
-        unit="N/m",
-        doc="leg spring stiffness k",
-        source=_CHOSEN + " (k = m·20²)",
-        low=0.0,
-        high=1e8,
-        low_open=True,
+    mass: float = mass_parameter(10.0, "body mass m", _CHOSEN)
+    rest_length: float = length_parameter(0.5, "leg rest length l0", _CHOSEN)
+    stiffness: float = stiffness_parameter(
+        4000.0, "leg spring stiffness k", _CHOSEN + " (k = m·20²)", high=1e8
     )
     damping: float = parameter(
-        0.0,
-        unit="N·s/m",
+        0.0, unit="N·s/m", low=0.0, high=1e5,
         doc="leg damping b in stance (optional loss; the closed forms assume 0)",
         source="ideal spring; Raibert's leg friction is lumped into touchdown_loss",
-        low=0.0,
-        high=1e5,
-    )
+    )  # fmt: skip
     touchdown_loss: float = parameter(
-        0.1,
-        unit="1",
+        0.1, unit="1", low=0.0, high=1.0, high_open=True,
         doc="fraction ε of the kinetic energy lost at touchdown (ẏ⁺ = sqrt(1 − ε) ẏ⁻)",
         source=_RAIBERT + " (unsprung leg mass ≈ 10 % of the body's)",
-        low=0.0,
-        high=1.0,
-        high_open=True,
-    )
-    desired_height: float = parameter(
+    )  # fmt: skip
+    desired_height: float = length_parameter(
         0.7,
-        unit="m",
-        doc="desired apex height h_d of the body (E_d = m g h_d)",
-        source="chosen: 0.2 m of flight above the 0.5 m leg",
-        low=0.0,
+        "desired apex height h_d of the body (E_d = m g h_d)",
+        "chosen: 0.2 m of flight above the 0.5 m leg",
         high=100.0,
-        low_open=True,
     )
     gain: float = parameter(
-        0.5,
-        unit="1",
+        0.5, unit="1", low=0.0, high=4.0, low_open=True,
         doc="energy-feedback gain K: W = (E_a − E_b) + K (E_d − E_a)",
         source="inside the stable range (0, 2); P'(h_d) = 1 − K = 0.5",
-        low=0.0,
-        high=4.0,
-        low_open=True,  # K = 0: every apex height is a fixed point (the map is the identity)
-    )
+    )  # fmt: skip
     gravity: float = gravity_parameter()
 
     @classmethod

@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
-from ..returnmap import fixed_points_1d, return_map
+from ..returnmap import fixed_points_1d, one_dimensional, return_map
 from .labels import state_label, state_unit
 
 __all__ = ["plot_return_map"]
@@ -77,14 +77,7 @@ def plot_return_map(
         If the section is not one-dimensional, the interval is empty, or ``iterations`` or
         ``samples`` is not a positive integer.
     """
-    if len(model.section.coordinates) != 1:
-        raise GaitoptInputError(
-            f"{model.name}: a staircase plot needs a 1-D section; this one has coordinates "
-            f"{', '.join(model.section.coordinates)}"
-        )
-    lo, hi = map(float, interval)
-    if not lo < hi:
-        raise GaitoptInputError(f"`interval` must be increasing, got {interval!r}")
+    lo, hi = one_dimensional(model, interval, "a staircase plot needs")
     if int(iterations) != iterations or iterations < 0:
         raise GaitoptInputError(f"`iterations` must be a non-negative integer, got {iterations!r}")
     if int(samples) != samples or samples < 2:
