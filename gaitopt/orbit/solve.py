@@ -61,6 +61,7 @@ class Solved:
     converged: bool
     iterations: int
     evaluation: Any = None
+    info: Any = None  # the solver's own record (IPOPT's stats)
 
 
 @dataclass
@@ -102,6 +103,10 @@ class OrbitSolution:
         The return map's linearisation (rule 5), where certified.
     defect : str
         The certificate's or a pre-check's failure in words ("" where none).
+    error_parts : dict
+        The named parts of :attr:`error` (an a-posteriori refinement's ``refinement_error``).
+    info : object
+        The last solve's own record (:attr:`Solved.info`).
     """
 
     success: bool
@@ -119,6 +124,8 @@ class OrbitSolution:
     last_iterations: int = 0
     return_map: Any = None
     defect: str = ""
+    error_parts: dict[str, float] = field(default_factory=dict)
+    info: Any = None
 
     @property
     def advice(self) -> str:
@@ -159,12 +166,24 @@ def refine(
     solver: Callable[[Any, np.ndarray], Solved],
     tol: float,
     max_refinements: int,
+    first: Solved | None = None,
 ) -> OrbitSolution:
     """Stages 1–2: solve from ``w0``; while the discretisation error exceeds ``tol`` (at most
     ``max_refinements`` times, and while the transcription is ``refinable``) refine the mesh and
     re-solve from :meth:`~Transcription.carry`.  A solution is accepted where ``F`` and ``F_w``
     are finite and the rows' bounds hold to ``tol``.  Returns status ``"converged"`` (solved and
-    refined) or ``not_converged``, ``singular``, ``discretisation``."""
+    refined) or ``not_converged``, ``singular``, ``discretisation``.
+
+    A transcription with the hook ``refinement_error(w, fine, w_fine)`` (named parts of the
+    change between successive meshes' solutions, e.g. an optimum's cost and orbit) is refined a
+    posteriori instead: from ``first`` (the initial mesh's solution at ``w0``, already solved),
+    each refined mesh is solved and accepted where the solver converged, the error being the
+    largest part of the change (inf before any refinement); a refined solve that does not
+    converge ends the refinement with the mesh before it.  Status ``"converged"`` or
+    ``discretisation`` (the solution and its error carried: the caller may still certify it).
+    """
+    if hasattr(transcription, "refinement_error"):
+        return _refine_a_posteriori(transcription, w0, solver, tol, max_refinements, first)
     t, total, refinements, error = transcription, 0, 0, float("nan")
     while True:
         solved = solver(t, w0)
@@ -199,6 +218,39 @@ def refine(
         )  # fmt: skip
     return OrbitSolution(False, "converged", "solved and refined (not yet certified)", t, w,
                          error=error, **common)  # fmt: skip
+
+
+def _refine_a_posteriori(
+    t: Any, w0, solver: Callable[[Any, np.ndarray], Solved], tol: float, max_refinements: int,
+    first: Solved | None,
+) -> OrbitSolution:  # fmt: skip
+    """:func:`refine` by the change between successive meshes' solutions."""
+    last = first if first is not None else solver(t, w0)
+    w, total, refinements = last.w, last.iterations, 0
+    if first is None and not last.converged:
+        return OrbitSolution(False, "not_converged", "the solver did not converge", t, w, total,
+                             last_iterations=last.iterations, info=last.info)  # fmt: skip
+    parts: dict[str, float] = {}
+    error = float("inf")
+    while refinements < max_refinements:
+        fine = t.refined()
+        solved = solver(fine, fine.carry(w, t))
+        if not solved.converged:
+            break
+        parts = dict(t.refinement_error(w, fine, solved.w))
+        error = max(parts.values())
+        t, w, last = fine, solved.w, solved
+        total += solved.iterations
+        refinements += 1
+        if error <= tol:
+            break
+    status = "converged" if error <= tol else "discretisation"
+    words = ("solved and refined (not yet certified)" if error <= tol else
+             f"the discretisation error {error:.2g} (the change under mesh refinement) stays "
+             f"above {tol:g} after {refinements} refinements")  # fmt: skip
+    return OrbitSolution(False, status, words, t, w, total, error, refinements,
+                         last_iterations=last.iterations, error_parts=parts,
+                         info=last.info)  # fmt: skip
 
 
 def certificate(transcription: Any, w, *, guard_tol: float = 1e-6) -> str | None:
