@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..orbit.solve import certificate
+from ..orbit import solve as sequence
 from ..stability import is_stable
 from .active import _active
 from .arcs import saturated_spans
@@ -72,7 +72,7 @@ def _certify(
     # The one sequence's certificate stage (gaitopt.orbit.solve.certificate): the common
     # certificate on the collocation polynomials, then the power split's complementarity.
     t = CollocationTranscription(col=col)
-    problem_msg = certificate(t, w, guard_tol=GUARD_TOL)
+    problem_msg = sequence.certificate(t, w, guard_tol=GUARD_TOL)
     if problem_msg is not None:
         result.message = "not a gait: " + problem_msg.removeprefix("no gait: ")
         result.status = "not_a_gait"

@@ -20,7 +20,7 @@ import numpy as np
 from ..arguments import check_count, check_positive
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
-from ..orbit.solve import refine
+from ..orbit import solve as sequence
 from ..threads import single_blas_thread
 from ..workers import Map, check_workers, worker_map
 from .active import _active
@@ -537,7 +537,7 @@ def _finish(
             )
     # The one sequence's refine stage (gaitopt.orbit.solve.refine), a posteriori: double the
     # mesh (warm started) until the cost and the orbit change by less than ``tol``.
-    refinement = refine(
+    refinement = sequence.refine(
         OptimumTranscription(col), w, solver=ipopt_solver, tol=tol,
         max_refinements=_MAX_REFINEMENTS, first=first_solution(w, stats),
     )  # fmt: skip

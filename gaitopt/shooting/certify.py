@@ -13,11 +13,14 @@ from typing import Any
 import numpy as np
 
 from ..hybrid import HybridModel
-from ..orbit.certificate import DenseArc, check_early_crossings, constant_input
+from ..orbit import solve as sequence
 from ..orbit.certificate import check_constraints as _check_constraints
-from ..result import LimitCycle, OrbitArc
+from ..orbit.certificate import check_early_crossings
+from ..result import LimitCycle
 from ..stability import is_stable
+from .dense import check_section, dense_arcs
 from .problem import ShootingProblem
+from .transcription import ShootingTranscription
 
 __all__ = ["certify", "check_constraints", "check_section", "dense_arcs", "limit_cycle"]
 
@@ -69,8 +72,6 @@ def certify(
     evaluation : Evaluation, optional
         :meth:`ShootingProblem.evaluate` at ``w`` where the caller has it (not recomputed).
     """
-    from ..orbit.solve import OrbitSolution, judge
-    from .transcription import ShootingTranscription
 
     start = time.perf_counter() if start is None else start
     t = ShootingTranscription(model, u=u, problem=problem, linearisation=linearisation)
@@ -79,11 +80,14 @@ def certify(
     ev = t.evaluate(w)
     F = np.asarray(linearisation[2] if linearisation is not None else ev.F, dtype=float)
     residual = float(np.max(np.abs(F))) if np.all(np.isfinite(F)) else float("inf")
-    solved = OrbitSolution(False, "converged", "", t, np.asarray(w, dtype=float).ravel(),
-                           iterations, discretisation_error, residual=residual, evaluation=ev,
-                           last_iterations=iterations)  # fmt: skip
-    judged = judge(solved, verify=verify, guard_tol=max(tol * 1e3, 1e-8), referee_tol=tol * 1e3,
-                   precheck=False)  # fmt: skip
+    solved = sequence.OrbitSolution(
+        False, "converged", "", t, np.asarray(w, dtype=float).ravel(), iterations,
+        discretisation_error, residual=residual, evaluation=ev, last_iterations=iterations,
+    )  # fmt: skip
+    judged = sequence.judge(
+        solved, verify=verify, guard_tol=max(tol * 1e3, 1e-8), referee_tol=tol * 1e3,
+        precheck=False,
+    )  # fmt: skip
     return limit_cycle(judged, verify=verify, note=note, start=start)
 
 
@@ -161,50 +165,6 @@ def limit_cycle(
         solve_time=time.perf_counter() - start,
         **common,
     )
-
-
-def _phase_label(model: HybridModel, problem: ShootingProblem, k: int) -> str:
-    name = model.phases[problem.chain[k]].name
-    step = f" (step {k // len(model.phases) + 1})" if problem.cycles > 1 else ""
-    return f"phase '{name}'{step}"
-
-
-def dense_arcs(
-    model: HybridModel,
-    problem: ShootingProblem,
-    orbit: list[OrbitArc],
-    u: np.ndarray,
-    durations: np.ndarray | None = None,
-    ends: list[np.ndarray] | None = None,
-) -> list[DenseArc]:
-    """The shooting orbit's dense samples (the RK integrator's, :meth:`ShootingProblem.orbit`)
-    as the certificate reads them: the per-step input held at every sample; ``durations`` the
-    shooting's (default: each arc's time span), ``ends`` its solved phase-end states (default:
-    the last samples, which a finer sampling integration puts off the solved ends by the
-    discretisation error)."""
-    out = []
-    for k, arc in enumerate(orbit):
-        K = arc.x.shape[1]
-        duration = float(arc.t[-1] - arc.t[0]) if durations is None else float(durations[k])
-        out.append(
-            DenseArc(
-                arc.phase, _phase_label(model, problem, k), duration, np.asarray(arc.t),
-                np.asarray(arc.x, dtype=float), constant_input(u, K),
-                None if ends is None else np.asarray(ends[k], dtype=float),
-            )
-        )  # fmt: skip
-    return out
-
-
-def check_section(x_return, x_star) -> str | None:
-    """The return state lies where the section's lift puts it (the model's own consistency)."""
-    error = float(np.max(np.abs(np.asarray(x_return).ravel() - x_star)))
-    if error > 1e-8 * (1 + np.max(np.abs(x_star))):
-        return (
-            f"internal inconsistency: the return state leaves the section parametrisation by "
-            f"{error:.3g}; the model's section lift does not match its reset"
-        )
-    return None
 
 
 def _check_dense(model, problem, orbit, u, p) -> str | None:

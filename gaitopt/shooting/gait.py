@@ -16,8 +16,8 @@ import numpy as np
 
 from ..errors import GaitoptInputError, GuessError
 from ..hybrid import HybridModel
+from ..orbit import solve as sequence
 from ..orbit.solve import Solved
-from ..orbit.solve import solve_gait as orbit_solve_gait
 from ..result import LimitCycle
 from ..simulation import simulate
 from .certify import limit_cycle
@@ -212,7 +212,7 @@ def solve_gait(
     start = time.perf_counter() if start is None else start
     steps = problem.cycles
     t = ShootingTranscription(model, u=u, problem=problem)
-    solution = orbit_solve_gait(
+    solution = sequence.solve_gait(
         t, w0, solver=shooting_solver(method), tol=tol, max_refinements=_MAX_REFINEMENTS,
         verify=verify, guard_tol=max(tol * 1e3, 1e-8), referee_tol=tol * 1e3,
     )  # fmt: skip

@@ -21,7 +21,7 @@ from ..orbit.layout import Layout
 from ..orbit.referee import LADDER, referee
 from ..orbit.sensitivity import section_jacobians
 from ..orbit.transcription import Bounds, ReturnMap, Symbols
-from .certify import check_section, dense_arcs
+from .dense import check_section, dense_arcs
 from .problem import MultipleShooting, ShootingProblem, shooting_problem
 
 __all__ = ["MAX_MESH_FACTOR", "ShootingTranscription"]
