@@ -1,9 +1,12 @@
-"""Certify a solution of the shooting equations ("never a false gait"): the common certificate
+"""Certify a solution of the shooting equations ("never a false gait") by the one sequence's
+stage :func:`gaitopt.orbit.solve.judge` on a
+:class:`~gaitopt.shooting.transcription.ShootingTranscription`: the common certificate
 (:mod:`gaitopt.orbit.certificate`: durations positive, each phase ending on its guard admissibly
 and in its direction, no guard crossed earlier, every unilateral constraint holding on dense
-samples, the minimal period) on the RK integrator's dense samples, the section's consistency, and
-the common referee (:mod:`gaitopt.orbit.referee`, through :mod:`gaitopt.shooting.verify`); then
-the Floquet multipliers.  :func:`gaitopt.optimize_gait` uses the same certificate and referee."""
+samples, the minimal period) on the RK integrator's dense samples (:mod:`gaitopt.shooting.dense`)
+with the section's consistency, the Floquet multipliers, and the common referee
+(:mod:`gaitopt.orbit.referee`).  :func:`limit_cycle` reads the judged solution as a
+:class:`LimitCycle`; :func:`gaitopt.optimize_gait` uses the same certificate and referee."""
 
 from __future__ import annotations
 
