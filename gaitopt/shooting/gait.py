@@ -1,10 +1,12 @@
 """A gait from a guess: the direct solve below :func:`~gaitopt.search.find_limit_cycle`
 — the argument checks, the guess (a simulation or a previous orbit), the solve on the
-:class:`~gaitopt.shooting.problem.ShootingProblem` (:func:`solve_gait`: mesh refinement until
-the discretisation error is below the tolerance, and
-:func:`~gaitopt.shooting.certify.certify`), and the record of a search that found nothing
-(:func:`failed`).  No homotopy, no multi-start: those (:mod:`gaitopt.homotopy`) call this, and
-:func:`~gaitopt.search.find_limit_cycle` puts them together."""
+:class:`~gaitopt.shooting.problem.ShootingProblem` (:func:`solve_gait`: the one sequence
+:func:`gaitopt.orbit.solve_gait` — mesh refinement until the discretisation error is below the
+tolerance, the certificate, the referee — on its
+:class:`~gaitopt.shooting.transcription.ShootingTranscription`), and the record of a search
+that found nothing (:func:`failed`).  No homotopy, no multi-start: those
+(:mod:`gaitopt.homotopy`) call this, and :func:`~gaitopt.search.find_limit_cycle` puts them
+together."""
 
 from __future__ import annotations
 
