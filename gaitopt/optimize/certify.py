@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..orbit.referee import TIGHT, referee
+from ..orbit import solve as sequence
 from ..stability import is_stable
 from .active import _active
 from .arcs import saturated_spans
@@ -24,14 +24,8 @@ from .floquet import multipliers_of, return_map_jacobian
 from .problem import GaitProblem
 from .result import OptimalGait
 from .state_arcs import touch_times
-from .verify import (
-    check_dense,
-    feedforward_of,
-    map_jacobian_fd,
-    orbit_arcs,
-    profiles,
-    simulated_cost,
-)
+from .transcription import CollocationTranscription
+from .verify import GUARD_TOL, map_jacobian_fd, orbit_arcs, profiles
 
 #: The simulated return must be the fixed point to this, relative to ``1 + max |x*|``.
 RETURN_TOL = 1e-6
@@ -75,15 +69,10 @@ def _certify(
         problem=problem.describe(),
         orbit=orbit,
     )
-    problem_msg = check_dense(col, sol)
-    if problem_msg is None and problem.cost_kind in ("work", "cot") and col.structure is None:
-        B = col.blocks
-        overlap = max(
-            float(np.max(np.minimum(B.get(w, f"Pplus{k}"), B.get(w, f"Pminus{k}"))))
-            for k in range(len(col.chain))
-        )
-        if overlap > 1e-6:
-            problem_msg = f"the power split is not complementary (p⁺p⁻ overlap {overlap:.2g} W)"
+    # The one sequence's certificate stage (gaitopt.orbit.solve.certificate): the common
+    # certificate on the collocation polynomials, then the power split's complementarity.
+    t = CollocationTranscription(col=col)
+    problem_msg = sequence.certificate(t, w, guard_tol=GUARD_TOL)
     if problem_msg is not None:
         result.message = "not a gait: " + problem_msg.removeprefix("no gait: ")
         result.status = "not_a_gait"
@@ -93,14 +82,10 @@ def _certify(
         result.message = "optimal gait found (not verified: verify=False)"
         return result
 
-    # The common referee: the feedforward simulation must return, keep the phase timing and
-    # cost the same (at the tight tolerances: its return error and cost are reported figures).
-    verdict = referee(
-        gait_model, x_star, np.asarray(sol["T"], dtype=float), problem.steps, tol=RETURN_TOL,
-        feedforward=feedforward_of(profs), max_phase_time=problem.max_phase_time,
-        cost=(float(sol["cost"]), lambda sim: simulated_cost(problem, gait_model, sim, profs)),
-        tolerances=(TIGHT,),
-    )  # fmt: skip
+    # The one sequence's referee stage (rule 8): the feedforward simulation must return, keep
+    # the phase timing and cost the same (at the tight tolerances: its return error and cost are
+    # reported figures).
+    verdict = t.referee(w, RETURN_TOL)
     if verdict.simulation is None or not np.isfinite(verdict.return_error):
         result.message = "the optimum is not confirmed by simulation: " + verdict.message
         result.status = "not_verified"

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -21,6 +20,7 @@ import numpy as np
 from ..arguments import check_count, check_positive
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
+from ..orbit import solve as sequence
 from ..threads import single_blas_thread
 from ..workers import Map, check_workers, worker_map
 from .active import _active
@@ -34,6 +34,8 @@ from .attempt import (
 from .certify import _certify
 from .collocation import Collocation, RadauMesh
 from .guess import check_warm_start
+from .mesh import OptimumTranscription, first_solution, ipopt_solver
+from .mesh import refined as _refined  # noqa: F401 (the name tests read)
 from .problem import _WHY_STEPS, MAX_STEPS, GaitProblem, as_problem
 from .result import Minimum, OptimalGait, StartRecord
 from .spectral_bound import with_roughness_budget
@@ -533,28 +535,18 @@ def _finish(
                 f"; the {arcs} did not converge "
                 f"({stats_exact.get('return_status')}): refined without them"
             )
+    # The one sequence's refine stage (gaitopt.orbit.solve.refine), a posteriori: double the
+    # mesh (warm started) until the cost and the orbit change by less than ``tol``.
+    refinement = sequence.refine(
+        OptimumTranscription(col), w, solver=ipopt_solver, tol=tol,
+        max_refinements=_MAX_REFINEMENTS, first=first_solution(w, stats),
+    )  # fmt: skip
+    col, w, stats = refinement.transcription.col, refinement.w, refinement.info
     sol = col.unpack(w, p)
-    cost_error = orbit_error = float("inf")
-    refinements = 0
-    while refinements < _MAX_REFINEMENTS:
-        fine = _refined(col)
-        w_fine, stats_fine = _run(fine, fine.from_solution(col, w, p), p)
-        if not _converged(stats_fine):
-            break
-        sol_fine = fine.unpack(w_fine, p)
-        scale = abs(sol_fine["cost"])
-        cost_error = abs(sol_fine["cost"] - sol["cost"]) / (scale if scale > 1e-8 else 1.0)
-        orbit_error = float(
-            max(
-                np.max(np.abs(sol_fine["s"] - sol["s"])) / (1 + np.max(np.abs(sol_fine["s"]))),
-                abs(sol_fine["period"] - sol["period"]) / sol_fine["period"],
-            )
-        )
-        col, w, stats, sol = fine, w_fine, stats_fine, sol_fine
-        refinements += 1
-        if max(cost_error, orbit_error) <= tol:
-            break
-    disc_error = max(cost_error, orbit_error)
+    refinements = refinement.refinements
+    cost_error = refinement.error_parts.get("cost", float("inf"))
+    orbit_error = refinement.error_parts.get("orbit", float("inf"))
+    disc_error = refinement.error
     result = _certify(problem, col, w, stats, verify=verify)
     col.certify_limits(w, result)  # state bounds and path constraints: dense check, where active
     # The final transcription and its solution (the stabilising design differentiates it).
@@ -601,11 +593,3 @@ def _describe_arcs(structure: list, inputs: tuple[str, ...]) -> str:
     if touches:
         words.append(f"touch points of {', '.join(touches)} made junctions")
     return "; ".join(words)
-
-
-def _refined(col: Collocation) -> Collocation:
-    """The same transcription with every mesh interval halved (each arc's too)."""
-    if col.structure is None:
-        return _collocation(col.problem, col.mesh.refined())
-    structure = [[replace(a, intervals=2 * a.intervals) for a in arcs] for arcs in col.structure]
-    return _collocation(col.problem, col.mesh.refined(), structure)

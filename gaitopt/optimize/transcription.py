@@ -26,7 +26,14 @@ from ..orbit.transcription import Bounds, ReturnMap, Symbols
 from .collocation import Collocation, RadauMesh
 from .floquet import return_map_jacobian
 from .problem import GaitProblem, as_problem
-from .verify import dense_arcs, feedforward_of, orbit_arcs, profiles, simulated_cost
+from .verify import (
+    REPEATED_OPTIMUM,
+    dense_arcs,
+    feedforward_of,
+    orbit_arcs,
+    profiles,
+    simulated_cost,
+)
 
 __all__ = ["CollocationTranscription", "Residual"]
 
@@ -173,17 +180,50 @@ class CollocationTranscription:
             input_names=[tuple(self.model.inputs)] * len(c.chain),
         )  # fmt: skip
 
+    # -- the optional hooks of gaitopt.orbit.solve ----------------------------------------------
+    #: What to ask for when a period-k optimum is a shorter one repeated.
+    repeated_advice = REPEATED_OPTIMUM
+
+    def parameters(self, w) -> np.ndarray:
+        """The parameter vector at ``w`` (the free parameters' values in it)."""
+        return np.asarray(self._sol(w)["p"], dtype=float).ravel()
+
+    def gait_model(self, w) -> Any:
+        """The model at ``w``'s free parameter values (the model itself without free ones)."""
+        free = self.col.problem.free
+        if not free:
+            return self.model
+        values = self.col.blocks.get(np.asarray(w, float).ravel(), "free").ravel()
+        return self.model.replace(**dict(zip(free, map(float, values), strict=True)))
+
+    def consistency(self, w) -> str | None:
+        """The slack transcription of a work cost splits the power into its positive and
+        negative parts complementarily (``p⁺ p⁻ ≤ 1e-6`` W at every node), else why not."""
+        col = self.col
+        if col.problem.cost_kind not in ("work", "cot") or col.structure is not None:
+            return None
+        B, w = col.blocks, np.asarray(w, float).ravel()
+        overlap = max(
+            float(np.max(np.minimum(B.get(w, f"Pplus{k}"), B.get(w, f"Pminus{k}"))))
+            for k in range(len(col.chain))
+        )
+        if overlap > 1e-6:
+            return f"the power split is not complementary (p⁺p⁻ overlap {overlap:.2g} W)"
+        return None
+
     # -- rule 8 -------------------------------------------------------------------------------
     def referee(self, w, tol: float = RETURN_TOL):
-        """The common referee with the input profile as a feedforward and the cost (as
-        :func:`gaitopt.optimize_gait`'s certificate)."""
+        """The common referee with the input profile as a feedforward and the cost, at the
+        tight tolerances (its return error and cost are reported figures), on the model at
+        ``w``'s free parameter values (as :func:`gaitopt.optimize_gait`'s certificate)."""
         problem, sol = self.col.problem, self._sol(w)
+        model = self.gait_model(w)
         profs = profiles(self.col, sol)
         return _referee(
-            self.model, self.model.lift(sol["s"]), np.asarray(sol["T"], dtype=float),
+            model, model.lift(sol["s"]), np.asarray(sol["T"], dtype=float),
             problem.steps, tol=tol, feedforward=feedforward_of(profs),
             max_phase_time=problem.max_phase_time,
-            cost=(float(sol["cost"]), lambda sim: simulated_cost(problem, self.model, sim, profs)),
+            cost=(float(sol["cost"]), lambda sim: simulated_cost(problem, model, sim, profs)),
             tolerances=(TIGHT,),
         )  # fmt: skip
 

@@ -1,8 +1,9 @@
 """The referee of a gait: an independent simulation from its fixed point.
 
-Both front doors use it (:func:`gaitopt.find_limit_cycle` through
-:func:`gaitopt.shooting.verify_by_simulation`, :func:`gaitopt.optimize_gait` through
-:mod:`gaitopt.optimize.certify`).  The simulation is :func:`gaitopt.simulate` — SciPy's adaptive
+Both front doors use it through their transcription's ``referee`` (rule 8), the last stage of
+:func:`gaitopt.orbit.solve_gait` (:func:`gaitopt.find_limit_cycle` with the constant per-step
+input, :func:`gaitopt.optimize_gait` with the optimal profile as a feedforward).
+The simulation is :func:`gaitopt.simulate` — SciPy's adaptive
 DOP853 with located, directional, admissible events and every declared unilateral constraint as a
 terminal event: a different method and step control from either transcription — driven by the
 gait's input, a constant per-step vector or a feedforward profile ``u(t, step)``.  It must

@@ -1,9 +1,12 @@
-"""Certify a solution of the shooting equations ("never a false gait"): the common certificate
+"""Certify a solution of the shooting equations ("never a false gait") by the one sequence's
+stage :func:`gaitopt.orbit.solve.judge` on a
+:class:`~gaitopt.shooting.transcription.ShootingTranscription`: the common certificate
 (:mod:`gaitopt.orbit.certificate`: durations positive, each phase ending on its guard admissibly
 and in its direction, no guard crossed earlier, every unilateral constraint holding on dense
-samples, the minimal period) on the RK integrator's dense samples, the section's consistency, and
-the common referee (:mod:`gaitopt.orbit.referee`, through :mod:`gaitopt.shooting.verify`); then
-the Floquet multipliers.  :func:`gaitopt.optimize_gait` uses the same certificate and referee."""
+samples, the minimal period) on the RK integrator's dense samples (:mod:`gaitopt.shooting.dense`)
+with the section's consistency, the Floquet multipliers, and the common referee
+(:mod:`gaitopt.orbit.referee`).  :func:`limit_cycle` reads the judged solution as a
+:class:`LimitCycle`; :func:`gaitopt.optimize_gait` uses the same certificate and referee."""
 
 from __future__ import annotations
 
@@ -13,21 +16,16 @@ from typing import Any
 import numpy as np
 
 from ..hybrid import HybridModel
-from ..orbit.certificate import (
-    DenseArc,
-    certify_orbit,
-    check_durations,
-    check_early_crossings,
-    constant_input,
-)
+from ..orbit import solve as sequence
 from ..orbit.certificate import check_constraints as _check_constraints
-from ..orbit.sensitivity import multipliers as sorted_multipliers
-from ..result import LimitCycle, OrbitArc
-from ..stability import is_stable, section_jacobians
+from ..orbit.certificate import check_early_crossings
+from ..result import LimitCycle
+from ..stability import is_stable
+from .dense import check_section, dense_arcs
 from .problem import ShootingProblem
-from .verify import verify_by_simulation
+from .transcription import ShootingTranscription
 
-__all__ = ["certify", "check_constraints", "dense_arcs"]
+__all__ = ["certify", "check_constraints", "check_section", "dense_arcs", "limit_cycle"]
 
 
 def certify(
@@ -47,10 +45,14 @@ def certify(
 ) -> LimitCycle:
     """Check a solution ``w`` of the shooting equations and build its :class:`LimitCycle`.
 
-    The checks of :func:`find_limit_cycle` ("no false gaits"): positive durations, admissible
-    directional crossing at each phase end, no earlier crossing on dense samples, minimal period,
-    and (with ``verify``) the independent simulation; then the multipliers.  Used by
-    :func:`find_limit_cycle` and by continuation for every point of a branch.
+    The checks of :func:`find_limit_cycle` ("no false gaits"), by the one sequence's stage
+    :func:`gaitopt.orbit.solve.judge` on a
+    :class:`~gaitopt.shooting.transcription.ShootingTranscription`: the certificate (positive
+    durations, admissible directional crossing at each phase end, no earlier crossing on dense
+    samples, unilateral constraints, minimal period, the section's consistency), the
+    multipliers and (with ``verify``) the independent simulation.  Used by continuation for
+    every point of a branch (:func:`find_limit_cycle` runs the whole
+    :func:`gaitopt.orbit.solve_gait`).
 
     Parameters
     ----------
@@ -63,7 +65,7 @@ def certify(
     u : numpy.ndarray
         The per-step inputs.
     verify : bool
-        Also simulate from the fixed point (:func:`gaitopt.shooting.verify.verify_by_simulation`).
+        Also simulate from the fixed point (:func:`gaitopt.orbit.referee`).
     tol : float
         The shooting tolerance; the simulated return must agree to ``tol · 1e3``.
     iterations, discretisation_error, note, start
@@ -73,24 +75,47 @@ def certify(
     evaluation : Evaluation, optional
         :meth:`ShootingProblem.evaluate` at ``w`` where the caller has it (not recomputed).
     """
+
     start = time.perf_counter() if start is None else start
-    p = model.p
-    ev = evaluation if evaluation is not None else problem.evaluate(w, u, p)
-    if linearisation is None:
-        linearisation = (problem.map_jacobian(ev.F_w), ev.F_u, ev.F, ev.x_return)
-    J_w, J_u, F, x_return = (np.asarray(v, dtype=float) for v in linearisation)
+    t = ShootingTranscription(model, u=u, problem=problem, linearisation=linearisation)
+    if evaluation is not None:
+        t.remember(w, evaluation)
+    ev = t.evaluate(w)
+    F = np.asarray(linearisation[2] if linearisation is not None else ev.F, dtype=float)
     residual = float(np.max(np.abs(F))) if np.all(np.isfinite(F)) else float("inf")
+    solved = sequence.OrbitSolution(
+        False, "converged", "", t, np.asarray(w, dtype=float).ravel(), iterations,
+        discretisation_error, residual=residual, evaluation=ev, last_iterations=iterations,
+    )  # fmt: skip
+    judged = sequence.judge(
+        solved, verify=verify, guard_tol=max(tol * 1e3, 1e-8), referee_tol=tol * 1e3,
+        precheck=False,
+    )  # fmt: skip
+    return limit_cycle(judged, verify=verify, note=note, start=start)
+
+
+def limit_cycle(
+    solution: Any, *, verify: bool, note: str = "", start: float | None = None
+) -> LimitCycle:
+    """The :class:`LimitCycle` of a judged shooting solution (:func:`gaitopt.orbit.solve.judge`
+    on a :class:`~gaitopt.shooting.transcription.ShootingTranscription`): a certified gait, or
+    one the certificate, the linearisation or the referee refused (``not_a_gait``,
+    ``singular``, ``not_verified``), with the shooting's numbers and the model's note on where
+    its gait exists."""
+    start = time.perf_counter() if start is None else start
+    t, w, ev = solution.transcription, solution.w, solution.evaluation
+    model, problem, u = t.model, t.problem, t.u
     durations = np.asarray(ev.durations, dtype=float).ravel()
     x_star = model.lift(w[: problem.m])
-    steps = problem.cycles
+    discretisation_error = solution.error
     common = dict(
         model=model,
-        steps=steps,
+        steps=problem.cycles,
         state_names=model.state_names,
         section_coordinates=model.section.coordinates,
         inputs=u,
-        residual=residual,
-        iterations=iterations,
+        residual=solution.residual,
+        iterations=solution.last_iterations,
         durations=durations,
         discretisation=problem.disc,
         discretisation_error=discretisation_error,
@@ -99,45 +124,34 @@ def certify(
         problem=problem,
         solution=np.array(w, dtype=float),
         evaluation=ev,
+        orbit=t.orbit(w),
     )
 
-    def fail(message: str, status: str, **extra: Any) -> LimitCycle:
+    def fail(message: str, status: str) -> LimitCycle:
         note_ = model.existence_note()
         message = f"{message} [{note_}]" if note_ else message
         return LimitCycle(
-            False, message, solve_time=time.perf_counter() - start, status=status, **common,
-            **extra,
-        )  # fmt: skip
+            False, message, solve_time=time.perf_counter() - start, status=status, **common
+        )
 
-    # -- no false gaits: the common certificate on the RK integrator's dense samples ---------
-    orbit = problem.orbit(w, u, p)
-    arcs = dense_arcs(model, problem, orbit, u, durations, ev.ends)
-    defect = check_durations(arcs) or _check_section(x_return, x_star)
-    if defect is None:
-        defect = certify_orbit(model, arcs, p, steps=steps, guard_tol=max(tol * 1e3, 1e-8))
-    if defect is not None:
-        return fail(defect, "not_a_gait", orbit=orbit)
-
-    try:
-        A, B = section_jacobians(J_w, J_u, problem.m, problem.n_g)
-    except np.linalg.LinAlgError:
+    if solution.status == "not_a_gait":
+        return fail(solution.defect, "not_a_gait")
+    if solution.status == "singular":
         return fail(
             "no isolated gait: the shooting equations are singular at the solution (the orbit "
             "is not transversal to a guard, or not isolated)",
             "singular",
-            orbit=orbit,
         )
-    multipliers = sorted_multipliers(A)
-
+    A, B = solution.return_map.A, solution.return_map.B_u
+    multipliers = solution.multipliers
+    verdict = solution.verdict
     verified, error, vmessage = False, float("nan"), "not verified by simulation (verify=False)"
     if verify:
-        verified, error, vmessage = verify_by_simulation(
-            model, x_star, durations, steps, u, tol * 1e3
-        )
+        verified, error, vmessage = verdict.ok, verdict.return_error, verdict.message
     success = verified or not verify
     accuracy = f"discretisation error {discretisation_error:.1g}{note}"
     message = (
-        f"periodic orbit found (residual {residual:.2g}, {accuracy}); " + vmessage
+        f"periodic orbit found (residual {solution.residual:.2g}, {accuracy}); " + vmessage
         if success
         else "the shooting solution is not confirmed: " + vmessage
     )
@@ -151,54 +165,9 @@ def certify(
         verification_error=error,
         jacobian=A,
         input_jacobian=B,
-        orbit=orbit,
         solve_time=time.perf_counter() - start,
         **common,
     )
-
-
-def _phase_label(model: HybridModel, problem: ShootingProblem, k: int) -> str:
-    name = model.phases[problem.chain[k]].name
-    step = f" (step {k // len(model.phases) + 1})" if problem.cycles > 1 else ""
-    return f"phase '{name}'{step}"
-
-
-def dense_arcs(
-    model: HybridModel,
-    problem: ShootingProblem,
-    orbit: list[OrbitArc],
-    u: np.ndarray,
-    durations: np.ndarray | None = None,
-    ends: list[np.ndarray] | None = None,
-) -> list[DenseArc]:
-    """The shooting orbit's dense samples (the RK integrator's, :meth:`ShootingProblem.orbit`)
-    as the certificate reads them: the per-step input held at every sample; ``durations`` the
-    shooting's (default: each arc's time span), ``ends`` its solved phase-end states (default:
-    the last samples, which a finer sampling integration puts off the solved ends by the
-    discretisation error)."""
-    out = []
-    for k, arc in enumerate(orbit):
-        K = arc.x.shape[1]
-        duration = float(arc.t[-1] - arc.t[0]) if durations is None else float(durations[k])
-        out.append(
-            DenseArc(
-                arc.phase, _phase_label(model, problem, k), duration, np.asarray(arc.t),
-                np.asarray(arc.x, dtype=float), constant_input(u, K),
-                None if ends is None else np.asarray(ends[k], dtype=float),
-            )
-        )  # fmt: skip
-    return out
-
-
-def _check_section(x_return, x_star) -> str | None:
-    """The return state lies where the section's lift puts it (the model's own consistency)."""
-    error = float(np.max(np.abs(np.asarray(x_return).ravel() - x_star)))
-    if error > 1e-8 * (1 + np.max(np.abs(x_star))):
-        return (
-            f"internal inconsistency: the return state leaves the section parametrisation by "
-            f"{error:.3g}; the model's section lift does not match its reset"
-        )
-    return None
 
 
 def _check_dense(model, problem, orbit, u, p) -> str | None:

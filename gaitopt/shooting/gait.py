@@ -1,10 +1,12 @@
 """A gait from a guess: the direct solve below :func:`~gaitopt.search.find_limit_cycle`
 — the argument checks, the guess (a simulation or a previous orbit), the solve on the
-:class:`~gaitopt.shooting.problem.ShootingProblem` (:func:`solve_gait`: mesh refinement until
-the discretisation error is below the tolerance, and
-:func:`~gaitopt.shooting.certify.certify`), and the record of a search that found nothing
-(:func:`failed`).  No homotopy, no multi-start: those (:mod:`gaitopt.homotopy`) call this, and
-:func:`~gaitopt.search.find_limit_cycle` puts them together."""
+:class:`~gaitopt.shooting.problem.ShootingProblem` (:func:`solve_gait`: the one sequence
+:func:`gaitopt.orbit.solve_gait` — mesh refinement until the discretisation error is below the
+tolerance, the certificate, the referee — on its
+:class:`~gaitopt.shooting.transcription.ShootingTranscription`), and the record of a search
+that found nothing (:func:`failed`).  No homotopy, no multi-start: those
+(:mod:`gaitopt.homotopy`) call this, and :func:`~gaitopt.search.find_limit_cycle` puts them
+together."""
 
 from __future__ import annotations
 
@@ -16,11 +18,14 @@ import numpy as np
 
 from ..errors import GaitoptInputError, GuessError
 from ..hybrid import HybridModel
+from ..orbit import solve as sequence
+from ..orbit.solve import Solved
 from ..result import LimitCycle
 from ..simulation import simulate
-from .certify import certify
+from .certify import limit_cycle
 from .newton import METHODS
 from .problem import MultipleShooting, ShootingProblem, shooting_problem
+from .transcription import ShootingTranscription
 
 __all__ = [
     "check_arguments",
@@ -28,15 +33,12 @@ __all__ = [
     "direct_task",
     "failed",
     "gait_task",
+    "shooting_solver",
     "solve_from_guess",
     "solve_gait",
 ]
 
 _MAX_REFINEMENTS = 4
-#: The finest mesh any solve may reach, as a multiple of the model's RK steps per segment: a
-#: chain of warm starts (homotopy, libraries) refines from where the last one ended, up to here
-#: (Van der Pol at μ = 10 needs 32×; without a bound the chain compounded to 22 GB).
-_MAX_MESH_FACTOR = 64
 
 
 def check_arguments(
@@ -181,7 +183,10 @@ def solve_gait(
     start: float | None = None,
 ) -> LimitCycle:
     """Solve ``problem`` from the unknowns ``w0`` at ``model``'s parameters, refine the mesh
-    until the discretisation error is below ``tol``, and certify the orbit.
+    until the discretisation error is below ``tol``, and certify the orbit: the one sequence
+    :func:`gaitopt.orbit.solve_gait` on a
+    :class:`~gaitopt.shooting.transcription.ShootingTranscription` with the shooting's own
+    solver (Newton, then Newton with line search; or IPOPT), read as a :class:`LimitCycle`.
 
     The part of :func:`~gaitopt.search.find_limit_cycle` after the guess, for callers
     that build the unknowns themselves (branch switching at a period doubling, warm starts).
@@ -208,17 +213,44 @@ def solve_gait(
     """
     start = time.perf_counter() if start is None else start
     steps = problem.cycles
-    p = model.p
+    t = ShootingTranscription(model, u=u, problem=problem)
+    solution = sequence.solve_gait(
+        t, w0, solver=shooting_solver(method), tol=tol, max_refinements=_MAX_REFINEMENTS,
+        verify=verify, guard_tol=max(tol * 1e3, 1e-8), referee_tol=tol * 1e3,
+    )  # fmt: skip
+    if solution.status in ("success", "not_a_gait", "not_verified") or (
+        solution.status == "singular" and solution.return_map is None and solution.defect
+    ):  # judged: the certificate, the linearisation or the referee decided
+        return limit_cycle(solution, verify=verify, start=start)
+    return _unsolved(model, steps, u, start, solution, method, tol)
 
-    def fail(message: str, status: str, **extra: Any) -> LimitCycle:
-        return failed(model, steps, u, start, message, status, **extra)
 
-    # -- solve, then refine the mesh until the discretisation error is below tol ---------------
-    problem, w, ev, converged, singular, iterations, disc_error, refinements = _refined_solution(
-        model, problem, w0, u, method, tol
-    )
-    F, F_w = ev.F, ev.F_w
-    residual = float(np.max(np.abs(F))) if np.all(np.isfinite(F)) else float("inf")
+def shooting_solver(method: str) -> Callable[[Any, np.ndarray], Solved]:
+    """The shooting's solver for :func:`gaitopt.orbit.solve_gait`:
+    :meth:`ShootingProblem.solve` (Newton, then Newton with line search; or IPOPT) at the
+    transcription's ``u`` and ``p``, its last evaluation kept by the transcription."""
+
+    def solver(t: Any, w0: np.ndarray) -> Solved:
+        solution = t.problem.solve(w0, t.u, t.model.p, method=method)
+        w = solution.w
+        # One Jacobian per Newton step: the last one (at the solution) serves the error
+        # estimate, the multipliers and the input Jacobian.
+        ev = solution.evaluation
+        ev = ev if ev is not None else t.problem.evaluate(w, t.u, t.model.p)
+        t.remember(w, ev)
+        # Newton's own stopping test (abstol 1e-12) is stricter than `tol`: a point that meets
+        # `tol` is accepted (and certified) even where Newton stalled just above its abstol
+        # (orbit.solve.refine accepts by the residual).
+        return Solved(w, solution.converged, solution.iterations, ev)
+
+    return solver
+
+
+def _unsolved(model, steps, u, start, solution, method: str, tol: float) -> LimitCycle:
+    """The :class:`LimitCycle` of a solve that ended before the certificate (``singular``,
+    ``not_converged``, ``discretisation``, ``standing``), in the shooting's words."""
+    t, ev = solution.transcription, solution.evaluation
+    residual, iterations = solution.residual, solution.last_iterations
     durations = np.asarray(ev.durations, dtype=float).ravel()
     # A period only where it means something: every phase duration positive and finite.
     period = (
@@ -226,7 +258,11 @@ def solve_gait(
         if durations.size and np.all(np.isfinite(durations)) and np.all(durations > 0)
         else float("nan")
     )
-    if singular:
+
+    def fail(message: str, status: str, **extra: Any) -> LimitCycle:
+        return failed(model, steps, u, start, message, status, **extra)
+
+    if solution.status == "singular":
         return fail(
             status="singular",
             message=f"no isolated gait: the shooting equations are solved "
@@ -240,7 +276,7 @@ def solve_gait(
             durations=durations,
             period=period,
         )
-    if not converged or not residual <= tol:
+    if solution.status == "not_converged":
         if not np.isfinite(residual):
             how = (
                 f"{method} diverged: after {iterations} iterations the shooting equations are "
@@ -261,101 +297,27 @@ def solve_gait(
             durations=durations if np.isfinite(period) else np.zeros(0),
             period=float("nan"),  # not an orbit: no period
         )
-    if disc_error > tol:
-        condition = float(np.linalg.cond(F_w))
+    if solution.status == "discretisation":
+        disc_error = solution.error
+        condition = float(np.linalg.cond(ev.F_w))
         return fail(
             status="discretisation",
             message=f"no certified gait: the discretisation error estimate "
             f"{disc_error:.2g} stays above "
-            f"the tolerance {tol:g} after {refinements} mesh refinements "
-            f"({problem.disc.rk_steps} RK steps per segment), so the orbit is known only to about "
-            f"{disc_error:.1g}; the shooting Jacobian's condition number is {condition:.2g} "
-            f"(a multiplier near 1 makes the fixed point sensitive to every error): loosen `tol` "
-            f"to accept that accuracy",
+            f"the tolerance {tol:g} after {solution.refinements} mesh refinements "
+            f"({t.problem.disc.rk_steps} RK steps per segment), so the orbit is known only to "
+            f"about {disc_error:.1g}; the shooting Jacobian's condition number is "
+            f"{condition:.2g} (a multiplier near 1 makes the fixed point sensitive to every "
+            f"error): loosen `tol` to accept that accuracy",
             residual=residual,
             iterations=iterations,
             durations=durations,
             period=period,
             discretisation_error=disc_error,
         )
-    x_star = model.lift(w[: problem.m])
-    rate = np.asarray(model.phases[0].flow(x_star, u, p), dtype=float).ravel()
-    if float(np.max(np.abs(rate))) <= 1e-8 * (1 + float(np.max(np.abs(x_star)))):
-        return fail(
-            status="standing",
-            message="no gait: the orbit found is standing still "
-            "(an equilibrium: the state does not change, zero step length), which solves the "
-            "shooting equations with any phase "
-            "duration but is not a gait; the gait may not exist at these parameters (a passive "
-            "walker needs a slope), or try a guess with more speed",
-            residual=residual,
-            iterations=iterations,
-        )
-    disc_error_note = ""
-    return certify(
-        model,
-        problem,
-        w,
-        u,
-        verify=verify,
-        tol=tol,
-        iterations=iterations,
-        discretisation_error=disc_error,
-        note=disc_error_note,
-        start=start,
-        evaluation=ev,
-    )
-
-
-def _refined_solution(
-    model: HybridModel,
-    problem: ShootingProblem,
-    w0: np.ndarray,
-    u: np.ndarray,
-    method: str,
-    tol: float,
-) -> tuple[ShootingProblem, np.ndarray, Any, bool, bool, int, float, int]:
-    """Solve from ``w0``, then double the RK steps and re-solve (warm) while the discretisation
-    error estimate — one Newton correction towards twice the steps — exceeds ``tol`` (at most
-    :data:`_MAX_REFINEMENTS` times, and no finer than :data:`_MAX_MESH_FACTOR` times the model's
-    mesh).  Returns the last problem, its unknowns ``w`` and evaluation at ``w``, whether it
-    converged, whether its Jacobian was singular, Newton's iterations, the error estimate (NaN
-    where it was not reached) and the number of refinements."""
-    steps, disc, p = problem.cycles, problem.disc, model.p
-    refinements, disc_error, singular = 0, float("nan"), False
-    while True:
-        solution = problem.solve(w0, u, p, method=method)
-        w, converged, iterations, ev = (
-            solution.w, solution.converged, solution.iterations, solution.evaluation,
-        )  # fmt: skip
-        # One Jacobian per Newton step: the last one (at the solution) serves the error
-        # estimate, the multipliers and the input Jacobian.
-        ev = ev if ev is not None else problem.evaluate(w, u, p)
-        F, F_w = ev.F, ev.F_w
-        # Newton's own stopping test (abstol 1e-12) is stricter than `tol`: a point that meets
-        # `tol` is accepted (and certified) even where Newton stalled just above its abstol.
-        # A "converged" point where the equations are not even finite (e.g. a negative duration
-        # reached by the line search) is no solution.
-        finite = bool(np.all(np.isfinite(F_w)) and np.all(np.isfinite(F)))
-        converged = finite and (converged or float(np.max(np.abs(F))) <= tol)
-        if not converged:
-            break
-        try:
-            correction = problem.newton_step(F_w, problem.fine_residual(w, u, p))
-        except np.linalg.LinAlgError:  # a singular shooting Jacobian: not an isolated orbit
-            converged, singular = False, True
-            break
-        disc_error = float(np.max(np.abs(correction)))
-        # The finest mesh is bounded in absolute terms (not only per call), so that a chain of
-        # warm starts (homotopy, libraries) cannot compound refinements without limit.
-        finest = type(model).mesh[1] * _MAX_MESH_FACTOR
-        if disc_error <= tol or refinements == _MAX_REFINEMENTS or 2 * disc.rk_steps > finest:
-            break
-        disc = disc.refined()
-        problem, w0 = shooting_problem(type(model), disc, steps), w + correction
-        refinements += 1
-
-    return problem, w, ev, converged, singular, iterations, disc_error, refinements
+    # standing (the transcription's pre-check)
+    return fail(status=solution.status, message=solution.message, residual=residual,
+                iterations=iterations)  # fmt: skip
 
 
 def failed(model, steps: int, u, start: float, message: str, status: str, **extra) -> LimitCycle:

@@ -19,12 +19,17 @@ import numpy as np
 from ..hybrid import HybridModel
 from ..orbit.layout import Layout
 from ..orbit.referee import LADDER, referee
+from ..orbit.sensitivity import section_jacobians
 from ..orbit.transcription import Bounds, ReturnMap, Symbols
-from ..stability import section_jacobians
-from .certify import dense_arcs
+from .dense import check_section, dense_arcs
 from .problem import MultipleShooting, ShootingProblem, shooting_problem
 
-__all__ = ["ShootingTranscription"]
+__all__ = ["MAX_MESH_FACTOR", "ShootingTranscription"]
+
+#: The finest mesh any solve may reach, as a multiple of the model's RK steps per segment: a
+#: chain of warm starts (homotopy, libraries) refines from where the last one ended, up to here
+#: (Van der Pol at μ = 10 needs 32×; without a bound the chain compounded to 22 GB).
+MAX_MESH_FACTOR = 64
 
 
 class ShootingTranscription:
@@ -38,6 +43,12 @@ class ShootingTranscription:
         The shooting equations (cached per model class, mesh and steps).
     model, steps, u, p
         As the protocol says (rules 2, 4).
+
+    Its evaluation at the last ``w`` it saw (a solver's, :meth:`remember`) is kept, so that
+    the error estimate, the certificate and the multipliers read the Jacobian of the solve's
+    last step (as :func:`gaitopt.find_limit_cycle` always has); ``linearisation`` (``(∂[G;
+    P]/∂w, ∂[G; P]/∂u, F, x_return)``) overrides the return map's Jacobians and the section
+    check where a caller has its own.
     """
 
     def __init__(
@@ -48,6 +59,7 @@ class ShootingTranscription:
         u: Any = None,
         disc: MultipleShooting | None = None,
         problem: ShootingProblem | None = None,
+        linearisation: tuple[Any, ...] | None = None,
     ):
         if problem is None:
             disc = disc or MultipleShooting(*type(model).mesh)
@@ -56,6 +68,21 @@ class ShootingTranscription:
         self.model = model
         self.steps = problem.cycles
         self._u = np.asarray(model.nominal_input() if u is None else u, dtype=float).ravel()
+        self._memo: tuple[bytes, Any] | None = None  # (w's bytes, evaluation at w)
+        self._correction: tuple[bytes, np.ndarray] | None = None  # (w's bytes, Newton step)
+        self._orbit: tuple[bytes, list[Any]] | None = None  # (w's bytes, orbit at w)
+        self.linearisation = linearisation
+
+    def remember(self, w, evaluation: Any) -> None:
+        """Keep ``evaluation`` (:meth:`ShootingProblem.evaluate` at ``w`` with this ``u`` and
+        ``p``, a solver's last) as this transcription's evaluation at ``w``."""
+        self._memo = (np.asarray(w, dtype=float).ravel().tobytes(), evaluation)
+
+    def _evaluation(self, w) -> Any:
+        key = np.asarray(w, dtype=float).ravel().tobytes()
+        if self._memo is None or self._memo[0] != key:
+            self._memo = (key, self.problem.evaluate(w, self._u, self.p))
+        return self._memo[1]
 
     # -- rule 1: named blocks -----------------------------------------------------------------
     @cached_property
@@ -94,7 +121,10 @@ class ShootingTranscription:
 
     # -- rules 2, 3 ---------------------------------------------------------------------------
     def evaluate(self, w, u=None, p=None):
-        """:meth:`ShootingProblem.evaluate`: ``F``, ``F_w``, ``F_u``, ``F_p``, phase ends."""
+        """:meth:`ShootingProblem.evaluate`: ``F``, ``F_w``, ``F_u``, ``F_p``, phase ends (the
+        kept evaluation at ``w`` where ``u`` and ``p`` are the transcription's)."""
+        if u is None and p is None:
+            return self._evaluation(w)
         return self.problem.evaluate(w, self._u if u is None else u, self.p if p is None else p)
 
     def bounds(self) -> Bounds:
@@ -104,12 +134,16 @@ class ShootingTranscription:
 
     # -- rule 4: the orbit --------------------------------------------------------------------
     def orbit(self, w) -> list[Any]:
-        return self.problem.orbit(w, self._u, self.p)
+        key = np.asarray(w, dtype=float).ravel().tobytes()
+        if self._orbit is None or self._orbit[0] != key:  # kept: the certificate's and results'
+            self._orbit = (key, self.problem.orbit(w, self._u, self.p))
+        return self._orbit[1]
 
     def dense_arcs(self, w) -> list[Any]:
-        ev = self.problem.evaluate(w, self._u, self.p, jacobian=False)
-        return dense_arcs(self.model, self.problem, self.orbit(w), self._u,
-                          self.durations(w), ev.ends)  # fmt: skip
+        ev = self._evaluation(w)
+        durations = np.asarray(ev.durations, dtype=float).ravel()
+        return dense_arcs(self.model, self.problem, self.orbit(w), self._u, durations,
+                          ev.ends)  # fmt: skip
 
     def fixed_point(self, w) -> np.ndarray:
         return np.asarray(self.model.lift(self.problem.section_point(w)), dtype=float).ravel()
@@ -120,32 +154,60 @@ class ShootingTranscription:
     # -- rule 5: the return map ---------------------------------------------------------------
     def return_map_jacobians(self, w) -> ReturnMap:
         """By the implicit function theorem on the shooting equations
-        (:func:`gaitopt.stability.section_jacobians`), in ``s``, ``u`` and ``p``."""
-        ev = self.evaluate(w)
+        (:func:`gaitopt.orbit.sensitivity.section_jacobians`), in ``s`` and ``u`` (as
+        :func:`gaitopt.find_limit_cycle` reports them), then in ``p``; raises
+        ``numpy.linalg.LinAlgError`` where the equations are singular."""
+        ev = self._evaluation(w)
         pr = self.problem
-        J_up = np.hstack([np.asarray(ev.F_u, float), np.asarray(ev.F_p, float)])
-        A, B = section_jacobians(pr.map_jacobian(ev.F_w), J_up, pr.m, pr.n_g)
-        n_u = self._u.size
-        return ReturnMap(A, B[:, :n_u], B[:, n_u:])
+        if self.linearisation is not None:
+            J_w, J_u = (np.asarray(v, dtype=float) for v in self.linearisation[:2])
+        else:
+            J_w, J_u = pr.map_jacobian(ev.F_w), ev.F_u
+        J_w, J_u = np.asarray(J_w, dtype=float), np.asarray(J_u, dtype=float)
+        A, B_u = section_jacobians(J_w, J_u, pr.m, pr.n_g)
+        _, B_p = section_jacobians(J_w, np.asarray(ev.F_p, dtype=float), pr.m, pr.n_g)
+        return ReturnMap(A, B_u, B_p)
 
     # -- rule 6: refinement -------------------------------------------------------------------
+    @property
+    def refinable(self) -> bool:
+        """Whether :meth:`refined` stays within :data:`MAX_MESH_FACTOR` times the model's RK
+        steps (bounded in absolute terms, so that a chain of warm starts cannot compound
+        refinements without limit)."""
+        return 2 * self.problem.disc.rk_steps <= type(self.model).mesh[1] * MAX_MESH_FACTOR
+
     def refined(self) -> ShootingTranscription:
         """Twice the RK steps per segment (the same unknowns)."""
         fine = shooting_problem(type(self.model), self.problem.disc.refined(), self.steps)
         return ShootingTranscription(self.model, u=self._u, problem=fine)
 
     def carry(self, w, coarse) -> np.ndarray:
-        """The unknowns do not depend on the RK steps: ``w`` as it is."""
-        return np.array(w, dtype=float).ravel()
+        """The unknowns do not depend on the RK steps: ``w`` plus ``coarse``'s Newton correction
+        towards twice its RK steps (its :meth:`error_estimate`'s step) where this is that mesh,
+        else ``w`` as it is."""
+        w = np.array(w, dtype=float).ravel()
+        if (
+            isinstance(coarse, ShootingTranscription)
+            and coarse.problem.disc.refined() == self.problem.disc
+        ):
+            return w + coarse.correction(w)
+        return w
+
+    def correction(self, w) -> np.ndarray:
+        """One Newton step from ``w`` towards the mesh with twice the RK steps: ``−F_w⁻¹
+        F_fine(w)`` (kept for ``w``); raises ``numpy.linalg.LinAlgError`` where ``F_w`` is
+        singular."""
+        key = np.asarray(w, dtype=float).ravel().tobytes()
+        if self._correction is None or self._correction[0] != key:
+            ev = self._evaluation(w)
+            step = self.problem.newton_step(ev.F_w, self.problem.fine_residual(w, self._u, self.p))
+            self._correction = (key, step)
+        return self._correction[1]
 
     def error_estimate(self, w) -> float:
         """The size of one Newton correction from ``w`` towards the mesh with twice the RK steps
         (what :func:`gaitopt.find_limit_cycle` reports as ``discretisation_error``)."""
-        ev = self.evaluate(w)
-        correction = self.problem.newton_step(
-            ev.F_w, self.problem.fine_residual(w, self._u, self.p)
-        )
-        return float(np.max(np.abs(correction)))
+        return float(np.max(np.abs(self.correction(w))))
 
     # -- rule 7: symbols ----------------------------------------------------------------------
     @cached_property
@@ -171,11 +233,36 @@ class ShootingTranscription:
             input_names=[tuple(self.model.inputs)] * len(pr.chain),
         )  # fmt: skip
 
+    # -- the optional hooks of gaitopt.orbit.solve ----------------------------------------------
+    def precheck(self, w) -> tuple[str, str] | None:
+        """``("standing", why)`` where the orbit is an equilibrium (the state does not change:
+        it solves the shooting equations with any phase duration), else None."""
+        x_star = self.model.lift(np.asarray(w, dtype=float).ravel()[: self.problem.m])
+        rate = np.asarray(self.model.phases[0].flow(x_star, self._u, self.model.p), dtype=float)
+        if float(np.max(np.abs(rate.ravel()))) <= 1e-8 * (1 + float(np.max(np.abs(x_star)))):
+            return "standing", (
+                "no gait: the orbit found is standing still "
+                "(an equilibrium: the state does not change, zero step length), which solves the "
+                "shooting equations with any phase "
+                "duration but is not a gait; the gait may not exist at these parameters (a "
+                "passive walker needs a slope), or try a guess with more speed"
+            )
+        return None
+
+    def consistency(self, w) -> str | None:
+        """The return state lies where the section's lift puts it (the model's own
+        consistency)."""
+        x_return = (self.linearisation[3] if self.linearisation is not None
+                    else self._evaluation(w).x_return)  # fmt: skip
+        x_star = self.model.lift(np.asarray(w, dtype=float).ravel()[: self.problem.m])
+        return check_section(x_return, x_star)
+
     # -- rule 8 -------------------------------------------------------------------------------
     def referee(self, w, tol: float):
         """The common referee with the constant input (:mod:`gaitopt.shooting.verify`'s)."""
+        durations = np.asarray(self._evaluation(w).durations, dtype=float).ravel()
         return referee(
-            self.model, self.fixed_point(w), self.durations(w), self.steps, tol=tol,
+            self.model, self.fixed_point(w), durations, self.steps, tol=tol,
             inputs=self._u, max_phase_time=float(self.model.max_phase_time), tolerances=LADDER,
         )  # fmt: skip
 
