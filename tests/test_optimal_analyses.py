@@ -209,3 +209,33 @@ def test_cli_optimal_bad_input(optimal_file, tmp_path, capsys):
         assert main(argv) == 2, argv
         err = capsys.readouterr().err.strip()
         assert words in err and "--optimal" in err and len(err.splitlines()) == 1, err
+
+
+def test_open_loop_study_fast_mode(tmp_path):
+    # problems/optimal_open_loop.py (the README's numbers come from its full run) in its fast
+    # mode: the same comparisons as above, read from the JSON it writes.  Tolerances as above:
+    # two transcriptions of one orbit (period, fixed point 1e-9; multipliers 1e-7; the return
+    # map's Jacobians 1e-6), the continuation checked by the simulator with the NumPy profile.
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parent.parent / "problems" / "optimal_open_loop.py"
+    spec = importlib.util.spec_from_file_location("study_optimal_open_loop", path)
+    study = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(study)
+    assert study.main(["--out", str(tmp_path), "--fast"]) == 0
+    folder = tmp_path / "optimal_open_loop"
+    summary = json.loads((folder / "summary.json").read_text())
+    shooting, control = summary["shooting"], summary["control"]
+    assert shooting["success"]
+    assert shooting["period_gap"] <= 1e-9 and shooting["fixed_point_gap"] <= 1e-9
+    assert shooting["multiplier_gap"] <= 1e-7
+    # 1e-6 relative to the largest entry of A (14.1) and of B (0.06), as above (measured 3.9e-7
+    # and 2e-9 absolute).
+    assert control["A_gap_to_collocation"] <= 1.5e-5 and control["B_gap_to_collocation"] <= 1e-6
+    assert max(np.hypot(*z) for z in control["closed_loop_multipliers"]) < 1
+    assert control["controlled_errors"][-1] < 1e-6 < control["uncontrolled_errors"][-1]
+    cont = summary["continuation"]
+    assert cont["success"] and cont["all_verified"] and cont["points"] >= 3
+    assert cont["feedforward_return_error_at_end"] < 1e-8
+    assert (folder / "branch.csv").exists() and (folder / "branch.png").exists()
