@@ -211,6 +211,7 @@ def test_cli_optimal_bad_input(optimal_file, tmp_path, capsys):
         assert words in err and "--optimal" in err and len(err.splitlines()) == 1, err
 
 
+@pytest.mark.slow  # a study's fast mode (15-30 s here), as the other studies' in `make test-slow`
 def test_open_loop_study_fast_mode(tmp_path):
     # problems/optimal_open_loop.py (the README's numbers come from its full run) in its fast
     # mode: the same comparisons as above, read from the JSON it writes.  Tolerances as above:
