@@ -141,7 +141,8 @@ class FeedforwardModel(HybridModel):
         return self.base_model.max_step_length()
 
     def outline(self, phase: Phase, x: np.ndarray, points: np.ndarray) -> np.ndarray | None:
-        base_phase = self.base.structure().phases[self.phases.index(phase)]
+        index = next(i for i, ph in enumerate(self.phases) if ph is phase)
+        base_phase = self.base.structure().phases[index]
         return self.base_model.outline(base_phase, np.asarray(x)[: base_phase.n], points)
 
     def profile(self, t: float) -> np.ndarray:
