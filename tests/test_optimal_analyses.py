@@ -204,6 +204,11 @@ def test_cli_optimal_bad_input(optimal_file, tmp_path, capsys):
           "0.01"], "not slip"),
         (["continue", "compass_gait", "--optimal", str(tmp_path / "none.json"), "--param",
           "slope", "--to", "0.01"], "cannot read"),
+        (["continue", "compass_gait", "--optimal", str(optimal_file), "--param", "slope", "--to",
+          "0.01", "--follow", "PD", "--param2", "mass_hip", "--to2", "12", "--guess",
+          "stance=0.1"], "--guess does not apply"),
+        (["control", "compass_gait", "--optimal", str(optimal_file), "--kind", "deadbeat",
+          "--target", "stance=-0.15"], "--target does not apply"),
     ]  # fmt: skip
     for argv, words in cases:
         assert main(argv) == 2, argv
