@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import casadi as ca
@@ -50,11 +51,21 @@ CLOCK = "clock"
 #: How far beyond the profile's ends its end pieces continue before the values are held, as a
 #: fraction of ``1 + duration`` (see :func:`profile_sx`).
 HOLD_MARGIN = 1e-9
+#: How far beyond its nominal ends a phase reads its own pieces (a fraction of ``1 + duration``;
+#: :func:`profile_sx`): wide enough to hold the orbit's crossings (the collocation's timing
+#: error, 1e-8 s on the kneed walker), narrow enough not to matter (the pieces differ there by
+#: their joins' jumps, 1e-6: an effect of order 1e-12 on the orbit).
+PHASE_MARGIN = 1e-6
 
 _CLASSES: dict[str, type] = {}
 
 
-def profile_sx(breaks: np.ndarray, coefficients: np.ndarray, t: ca.SX) -> ca.SX:
+def profile_sx(
+    breaks: np.ndarray,
+    coefficients: np.ndarray,
+    t: ca.SX,
+    span: tuple[int, int] | None = None,
+) -> ca.SX:
     """The piecewise polynomial ``u(t)`` of an input profile as a CasADi expression of ``t`` (s).
 
     Parameters
@@ -66,6 +77,10 @@ def profile_sx(breaks: np.ndarray, coefficients: np.ndarray, t: ca.SX) -> ca.SX:
         highest power first (:class:`gaitopt.optimize.InputProfile`'s layout).
     t : casadi.SX
         The time (scalar).
+    span : (int, int), optional
+        The intervals ``[i, j)`` of one phase of the orbit (``breaks[i]`` to ``breaks[j]`` its
+        nominal start and end): within :data:`PHASE_MARGIN` of them the phase's own first and
+        last pieces are continued instead of the neighbouring phase's (see below).
 
     Returns
     -------
@@ -73,7 +88,8 @@ def profile_sx(breaks: np.ndarray, coefficients: np.ndarray, t: ca.SX) -> ca.SX:
         ``inputs × 1``: interval ``i`` where ``breaks[i] ≤ t < breaks[i + 1]`` (the last one up to
         and including its end), ``t`` clamped to ``[0, breaks[-1]]`` first, as
         :meth:`InputProfile.__call__` does, except that the clamp starts :data:`HOLD_MARGIN`
-        beyond each end.
+        beyond each end, and that with ``span`` the phase's pieces reach :data:`PHASE_MARGIN`
+        beyond its ends.
     """
     breaks = np.asarray(breaks, dtype=float)
     coefficients = np.asarray(coefficients, dtype=float)
@@ -88,19 +104,37 @@ def profile_sx(breaks: np.ndarray, coefficients: np.ndarray, t: ca.SX) -> ca.SX:
     end = float(breaks[-1])
     margin = HOLD_MARGIN * (1.0 + end)
     tc = ca.if_else(t > end + margin, end, ca.if_else(t < -margin, 0.0, t))
+    total = _pieces(breaks, coefficients, tc, 0, intervals)
+    if span is None or tuple(span) == (0, intervals):
+        return total
+    # A phase that ends inside the orbit (the kneed walker's knee strike) ends where the next
+    # phase's pieces begin, and the pieces join with a jump at the collocation's level (1e-7 to
+    # 1e-6): read on the global profile, the phase's last RK stage would land on one side or the
+    # other as Newton moves the crossing by rounding, and the shooting residual would jump with
+    # it (the kneed walker's Newton stalled at 6e-8).  Within PHASE_MARGIN of its nominal ends a
+    # phase reads its own pieces, as the collocation's phase does; the orbit's crossings lie
+    # there (within the collocation's error, 1e-8 s), so the residual is smooth at the gait.
+    i, j = span
+    window = PHASE_MARGIN * (1.0 + end)
+    inside = (t >= float(breaks[i]) - window) * (t <= float(breaks[j]) + window)
+    return ca.if_else(inside, _pieces(breaks, coefficients, t, i, j), total)
+
+
+def _pieces(breaks: np.ndarray, coefficients: np.ndarray, t: ca.SX, first: int, stop: int):
+    """``Σ mask_k · piece_k(t)`` over the intervals ``first ≤ k < stop``, each holding
+    ``[breaks[k], breaks[k + 1])``, the first also everything below and the last everything
+    from its start on (``searchsorted(side="right") − 1``, clipped)."""
     total = ca.SX.zeros(coefficients.shape[2], 1)
-    for i in range(intervals):
-        local = tc - float(breaks[i])
-        value = ca.DM(coefficients[i, 0, :])
-        for row in coefficients[i, 1:, :]:
+    for k in range(first, stop):
+        local = t - float(breaks[k])
+        value = ca.DM(coefficients[k, 0, :])
+        for row in coefficients[k, 1:, :]:
             value = value * local + ca.DM(row)
-        # searchsorted(side="right") − 1, clipped: interval i holds [breaks[i], breaks[i + 1]);
-        # the first also everything below, the last everything from its start on.
         inside = 1.0
-        if i > 0:
-            inside = inside * (tc >= float(breaks[i]))
-        if i < intervals - 1:
-            inside = inside * (tc < float(breaks[i + 1]))
+        if k > first:
+            inside = inside * (t >= float(breaks[k]))
+        if k < stop - 1:
+            inside = inside * (t < float(breaks[k + 1]))
         total = total + inside * value
     return total
 
@@ -118,6 +152,7 @@ class FeedforwardModel(HybridModel):
     profile_breaks: ClassVar[np.ndarray]
     profile_coefficients: ClassVar[np.ndarray]
     section_start: ClassVar[dict[str, float]]
+    profile_spans: ClassVar[tuple[tuple[int, int], ...] | None]
     profile_key: ClassVar[str]
 
     @property
@@ -160,7 +195,8 @@ class FeedforwardModel(HybridModel):
             n = phase.n
             x = ca.SX.sym("x", n + 1)
             xb, clock = x[:n], x[n]
-            u = profile_sx(cls.profile_breaks, cls.profile_coefficients, clock) + delta
+            span = cls.profile_spans[i] if cls.profile_spans else None
+            u = profile_sx(cls.profile_breaks, cls.profile_coefficients, clock, span) + delta
 
             def on(f: ca.Function | None, name: str, x=x, xb=xb, u=u) -> ca.Function | None:
                 return None if f is None else sym.function(name, x, f(xb, u, p))
@@ -228,6 +264,7 @@ def feedforward_class(
     profile: Any,
     section_start: dict[str, float],
     params: dict[str, float],
+    durations: Sequence[float] | None = None,
 ) -> type[FeedforwardModel]:
     """The open-loop model class of ``base`` driven by ``profile`` (built once per profile).
 
@@ -241,6 +278,9 @@ def feedforward_class(
         The optimum's section coordinates: the class's default start.
     params : dict
         The optimum's parameters: the class's parameter defaults (their ranges stay the base's).
+    durations : sequence of float, optional
+        The optimum's phase durations (s): where its phases end on breaks of the profile, each
+        phase reads its own pieces near its ends (:func:`profile_sx`'s ``span``).
 
     Returns
     -------
@@ -263,6 +303,8 @@ def feedforward_class(
     for part in (base.__module__, base.__qualname__, repr(sorted(params.items())),
                  repr(sorted(section_start.items()))):  # fmt: skip
         digest.update(part.encode())
+    spans = _spans(breaks, durations, len(base.structure().phases))
+    digest.update(repr(spans).encode())
     digest.update(breaks.tobytes())
     digest.update(coefficients.tobytes())
     key = digest.hexdigest()[:16]
@@ -293,7 +335,7 @@ def feedforward_class(
         "rates": dict(base.rates),
         "drawing": base.drawing,
         "on_ground": base.on_ground,
-        "mesh": _mesh(base, breaks),
+        "mesh": _mesh(base, breaks, spans),
         "max_phase_time": base.max_phase_time,
         "impulsive_inputs": tuple(base.impulsive_inputs),
         "input_bounds": _offset_bounds(base, breaks, coefficients),
@@ -301,6 +343,7 @@ def feedforward_class(
         "profile_breaks": breaks,
         "profile_coefficients": coefficients,
         "section_start": dict(section_start),
+        "profile_spans": spans,
         "profile_key": key,
         "__module__": __name__,
     }
@@ -315,16 +358,39 @@ def feedforward_class(
     return new
 
 
-def _mesh(base: type, breaks: np.ndarray) -> tuple[int, int]:
+def _spans(
+    breaks: np.ndarray, durations: Sequence[float] | None, phases: int
+) -> tuple[tuple[int, int], ...] | None:
+    """Each phase's intervals ``[i, j)`` of the profile, where the optimum's phases end on its
+    breaks (within 1e-9 of the period); None with one phase, or where one does not."""
+    if durations is None or phases == 1 or len(durations) != phases:
+        return None
+    ends = np.cumsum(np.asarray(durations, dtype=float))
+    index = [0]
+    for t in ends:
+        k = int(np.argmin(np.abs(breaks - t)))
+        if abs(breaks[k] - t) > 1e-9 * (1.0 + breaks[-1]) or k <= index[-1]:
+            return None
+        index.append(k)
+    if index[-1] != breaks.size - 1:
+        return None
+    return tuple((a, b) for a, b in zip(index[:-1], index[1:], strict=True))
+
+
+def _mesh(
+    base: type, breaks: np.ndarray, spans: tuple[tuple[int, int], ...] | None = None
+) -> tuple[int, int]:
     """The shooting mesh: as many segments per phase as the profile has intervals per phase
-    (at least the base model's), so that, for a one-phase step on the collocation's uniform
-    mesh, every segment is one polynomial piece; at least 8 RK steps per segment (where the
-    pieces join, the refinement is first order: see :func:`gaitopt.open_loop.open_loop_cycle`).
-    """
+    (at least the base model's), so that on the collocation's uniform mesh (the same number of
+    intervals in every phase, no arcs) every segment is one polynomial piece; at least 8 RK
+    steps per segment (where the pieces join, the refinement is first order: see
+    :func:`gaitopt.open_loop.open_loop_cycle`)."""
     segments, rk = base.mesh
     intervals = breaks.size - 1
     phases = len(base.structure().phases)
-    if intervals % phases == 0:
+    if spans is not None:  # the phases' own interval counts (equal on a uniform mesh)
+        segments = max(segments, *(j - i for i, j in spans))
+    elif intervals % phases == 0:
         segments = max(segments, intervals // phases)
     return segments, max(rk, 8)
 
@@ -379,5 +445,7 @@ def feedforward_model(gait: Any) -> FeedforwardModel:
         )
     base = gait.model
     start = {k: float(gait.fixed_point[k]) for k in base.section.coordinates}
-    cls = feedforward_class(type(base), profiles[0], start, dict(base.params))
+    cls = feedforward_class(
+        type(base), profiles[0], start, dict(base.params), getattr(gait, "durations", None)
+    )
     return cls(**base.params)
