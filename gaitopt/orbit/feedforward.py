@@ -56,6 +56,10 @@ HOLD_MARGIN = 1e-9
 #: error, 1e-8 s on the kneed walker), narrow enough not to matter (the pieces differ there by
 #: their joins' jumps, 1e-6: an effect of order 1e-12 on the orbit).
 PHASE_MARGIN = 1e-6
+#: How much earlier than its time each inner break of the profile switches pieces, as a fraction
+#: of ``1 + duration`` (:func:`_pieces`): above the clock's rounding at a segment's end (the
+#: shooting's continuity is solved to 1e-13), far below anything the orbit sees.
+BREAK_SHIFT = 1e-10
 
 _CLASSES: dict[str, type] = {}
 
@@ -88,8 +92,8 @@ def profile_sx(
         ``inputs × 1``: interval ``i`` where ``breaks[i] ≤ t < breaks[i + 1]`` (the last one up to
         and including its end), ``t`` clamped to ``[0, breaks[-1]]`` first, as
         :meth:`InputProfile.__call__` does, except that the clamp starts :data:`HOLD_MARGIN`
-        beyond each end, and that with ``span`` the phase's pieces reach :data:`PHASE_MARGIN`
-        beyond its ends.
+        beyond each end, each inner break switches :data:`BREAK_SHIFT` earlier, and with
+        ``span`` the phase's pieces reach :data:`PHASE_MARGIN` beyond its ends.
     """
     breaks = np.asarray(breaks, dtype=float)
     coefficients = np.asarray(coefficients, dtype=float)
@@ -123,7 +127,17 @@ def profile_sx(
 def _pieces(breaks: np.ndarray, coefficients: np.ndarray, t: ca.SX, first: int, stop: int):
     """``Σ mask_k · piece_k(t)`` over the intervals ``first ≤ k < stop``, each holding
     ``[breaks[k], breaks[k + 1])``, the first also everything below and the last everything
-    from its start on (``searchsorted(side="right") − 1``, clipped)."""
+    from its start on (``searchsorted(side="right") − 1``, clipped), except that each inner
+    break is moved :data:`BREAK_SHIFT` · (1 + duration) earlier.
+
+    The shooting's segments end on the breaks, and its RK stages there (the last of one
+    segment, the first of the next) read the clock within rounding of them; with the break
+    exactly there, that rounding would pick one piece or the other from one Newton iteration to
+    the next, and the pieces' jump (1e-7 to 1e-6) would make the residual jump with it (the
+    kneed walker's Newton stalled at 5e-8).  Moved a little earlier, the break leaves both
+    stages in the later piece whatever the rounding.
+    """
+    shift = BREAK_SHIFT * (1.0 + float(breaks[-1]))
     total = ca.SX.zeros(coefficients.shape[2], 1)
     for k in range(first, stop):
         local = t - float(breaks[k])
@@ -132,9 +146,9 @@ def _pieces(breaks: np.ndarray, coefficients: np.ndarray, t: ca.SX, first: int, 
             value = value * local + ca.DM(row)
         inside = 1.0
         if k > first:
-            inside = inside * (t >= float(breaks[k]))
+            inside = inside * (t >= float(breaks[k]) - shift)
         if k < stop - 1:
-            inside = inside * (t < float(breaks[k + 1]))
+            inside = inside * (t < float(breaks[k + 1]) - shift)
         total = total + inside * value
     return total
 
