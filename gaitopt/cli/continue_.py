@@ -93,17 +93,21 @@ def _continue_arguments(parser: argparse.ArgumentParser) -> None:
         help="write branch.json, branch.csv and branch.png to DIR (with --follow: curve.*)",
     )
     from .curves import add_curve_arguments  # two-parameter curves (--follow)
+    from .optimal_file import add_optimal_argument
 
     add_curve_arguments(parser)
+    add_optimal_argument(parser)
 
 
 def run_continue(args: argparse.Namespace) -> int:
     """``gaitopt continue``: follow a gait through a parameter; special points; cascades."""
     from .curves import run_curve, wants_curve
+    from .optimal_file import optimal_from_args
 
     if wants_curve(args):  # --follow: a special point in two parameters
         return run_curve(args)
-    model = build_model(args.model, args.set)
+    optimal = optimal_from_args(args)  # --optimal FILE: its open loop, the profile held fixed
+    model = optimal.model if optimal is not None else build_model(args.model, args.set)
     specs = {s.name: s for s in model.parameter_specs()}
     if args.param not in specs:
         raise InputError(
@@ -121,7 +125,7 @@ def run_continue(args: argparse.Namespace) -> int:
     try:
         with _solver_output_to_stderr():
             branch = continuation(
-                model,
+                model if optimal is None else optimal,
                 args.param,
                 to=to,
                 start=guess,

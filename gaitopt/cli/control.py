@@ -62,6 +62,9 @@ def _control_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="P",
         help="acker: comma-separated closed-loop multipliers (default all 0)",
     )
+    from .optimal_file import add_optimal_argument
+
+    add_optimal_argument(parser)  # the per-step input is then an offset on the optimal profile
     parser.add_argument(
         "--from",
         dest="start",
@@ -97,8 +100,18 @@ def _describe_decision(controller, decision, sim: Simulation | None) -> dict[str
 def run_control(args: argparse.Namespace) -> int:
     """``gaitopt control``: design a step-to-step controller around the model's gait."""
     from ..control import ControlDesignError, NoGaitError, design_controller
+    from .optimal_file import optimal_from_args
 
-    model = build_model(args.model, args.set)
+    optimal = optimal_from_args(args, ("target",))  # --optimal FILE: control its open loop
+    cycle = None
+    if optimal is not None:
+        from ..open_loop import open_loop_cycle
+
+        with _solver_output_to_stderr():
+            cycle = open_loop_cycle(optimal)
+        model = cycle.model  # the per-step input: an offset on the profile
+    else:
+        model = build_model(args.model, args.set)
     guess = parse_guess(model, args.guess)
     target = parse_guess(model, args.target) if args.target else None
     if target is not None:
@@ -130,7 +143,10 @@ def run_control(args: argparse.Namespace) -> int:
         _check_point(model, "--from", args.start, {n: v for n, (_, v) in start.items()})
     try:
         with _solver_output_to_stderr():
-            controller = design_controller(model, args.kind, guess=guess, target=target, **options)
+            controller = design_controller(
+                model if cycle is None else cycle, args.kind, guess=guess, target=target,
+                **options,
+            )  # fmt: skip
     except NoGaitError as exc:
         report = {"model": model.name, "params": model.params, "kind": args.kind,
                   "success": False, "message": str(exc)}  # fmt: skip

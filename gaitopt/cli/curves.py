@@ -81,7 +81,10 @@ def run_curve(args: argparse.Namespace) -> int:
             f"--both: does not apply with --follow {args.follow} (the curve runs from the first "
             f"{args.follow} point towards --to2); drop --both"
         )
-    model = build_model(args.model, args.set)
+    from .optimal_file import optimal_from_args
+
+    optimal = optimal_from_args(args)  # --optimal FILE: its open loop, the profile held fixed
+    model = optimal.model if optimal is not None else build_model(args.model, args.set)
     specs = {s.name: s for s in model.parameter_specs()}
     for option, name in (("--param", args.param), ("--param2", args.param2)):
         try:
@@ -111,7 +114,7 @@ def run_curve(args: argparse.Namespace) -> int:
     try:
         with _solver_output_to_stderr():
             curve = bifurcation_curve(
-                model,
+                model if optimal is None else optimal,
                 args.follow,
                 args.param,
                 args.param2,

@@ -31,9 +31,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import Any
 
 from ..errors import GaitoptInputError, ParameterError, did_you_mean
 from ..hybrid import HybridModel
+from ..open_loop import as_limit_cycle, is_optimal_gait
 from ..result import LimitCycle
 from ..shooting import find_limit_cycle
 from ..threads import single_blas_thread
@@ -52,11 +54,11 @@ DEFAULT_OPTIONS = PseudoArclength()
 
 @single_blas_thread
 def continuation(
-    model: HybridModel,
+    model: HybridModel | Any,
     param: str,
     *,
     to: float | None = None,
-    start: LimitCycle | Mapping[str, float] | None = None,
+    start: LimitCycle | Any | Mapping[str, float] | None = None,
     steps: int = 1,
     options: PseudoArclength = DEFAULT_OPTIONS,
     both_directions: bool = False,
@@ -70,16 +72,19 @@ def continuation(
 
     Parameters
     ----------
-    model : HybridModel
-        The model at the start.
+    model : HybridModel or OptimalGait
+        The model at the start; or an optimal gait (:func:`gaitopt.optimize_gait`), followed
+        with its input profile held fixed: its open loop (:func:`gaitopt.open_loop.
+        open_loop_cycle`, the profile on a clock since the section) is the model, its limit
+        cycle the start.
     param : str
         Name of the parameter to vary (any of ``model.params``).
     to : float, optional
         Parameter value to stop at (the direction of continuation).  Default: the end of the
         parameter's valid range above the start.
-    start : LimitCycle or mapping, optional
-        The gait to start from (a solved cycle at ``model``), or a guess for
-        :func:`find_limit_cycle`; default: the model's default start.
+    start : LimitCycle, OptimalGait or mapping, optional
+        The gait to start from (a solved cycle at ``model``, or an optimal gait: as ``model``),
+        or a guess for :func:`find_limit_cycle`; default: the model's default start.
     steps : int
         Period of the starting gait in steps.
     options : PseudoArclength
@@ -111,6 +116,9 @@ def continuation(
     ParameterError
         If ``param`` is not a parameter of the model or ``to`` is outside its range.
     """
+    if is_optimal_gait(model) or is_optimal_gait(start):  # its open loop's cycle
+        start = as_limit_cycle(start if is_optimal_gait(start) else model, tol=tol, verify=verify)
+        model = start.model
     specs = {s.name: s for s in model.parameter_specs()}
     if param not in specs:
         raise ParameterError(

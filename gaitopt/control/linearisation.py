@@ -5,10 +5,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..hybrid import HybridModel
+from ..open_loop import as_limit_cycle
 from ..result import LimitCycle
 from ..shooting import find_limit_cycle
 from .deadbeat_solver import Deadbeat
@@ -62,7 +64,7 @@ def sorted_by_modulus(z: np.ndarray) -> np.ndarray:
 
 
 def linearise(
-    model: HybridModel | LimitCycle,
+    model: HybridModel | LimitCycle | Any,
     guess: Mapping[str, float] | None = None,
     *,
     inputs: Sequence[float] | None = None,
@@ -72,8 +74,11 @@ def linearise(
 
     Parameters
     ----------
-    model : HybridModel or LimitCycle
-        A model with per-step inputs (``model.inputs``), or an already solved gait.
+    model : HybridModel, LimitCycle or OptimalGait
+        A model with per-step inputs (``model.inputs``), or an already solved gait, or an
+        optimal gait (:func:`gaitopt.optimize_gait`): its open loop's cycle
+        (:func:`gaitopt.open_loop.open_loop_cycle`), whose per-step input is an offset added to
+        the optimal profile over a step (``B = ∂P/∂δ``).
     guess : mapping, optional
         Section coordinates to start the gait search from (default: the model's default start).
     inputs : array_like, optional
@@ -90,6 +95,7 @@ def linearise(
     NoGaitError
         If no gait is found, or no input makes ``target`` a fixed point (the message says why).
     """
+    model = as_limit_cycle(model)  # an optimal gait: its open loop's cycle
     if isinstance(model, LimitCycle):
         cycle = model
         if not cycle.success:

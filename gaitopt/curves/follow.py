@@ -18,12 +18,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
 from ..continuation import PseudoArclength, SpecialPoint, continuation
 from ..errors import GaitoptInputError, ParameterError
 from ..hybrid import HybridModel
+from ..open_loop import as_limit_cycle, is_optimal_gait
 from ..result import LimitCycle
 from ..shooting import ShootingProblem, shooting_problem
 from ..threads import single_blas_thread
@@ -46,14 +48,14 @@ BRANCH_STEPS = PseudoArclength()
 
 @single_blas_thread
 def bifurcation_curve(
-    model: HybridModel,
+    model: HybridModel | Any,
     kind: str,
     param: str,
     param2: str | ParameterPath,
     *,
     to: float,
     param_to: float | None = None,
-    start: SpecialPoint | Mapping[str, float] | LimitCycle | None = None,
+    start: SpecialPoint | Mapping[str, float] | LimitCycle | Any | None = None,
     steps: int = 1,
     at: Sequence[float] = (),
     bounds: tuple[float, float] | None = None,
@@ -71,8 +73,10 @@ def bifurcation_curve(
 
     Parameters
     ----------
-    model : HybridModel
-        The model; its parameters are the start of the one-parameter search.
+    model : HybridModel or OptimalGait
+        The model; its parameters are the start of the one-parameter search.  Or an optimal gait
+        (:func:`gaitopt.optimize_gait`): its open loop, the input profile held fixed
+        (:func:`gaitopt.open_loop.open_loop_cycle`), is the model and its cycle the start.
     kind : {"PD", "LP", "NS", "boundary"}
         The special point to follow.
     param : str
@@ -85,9 +89,9 @@ def bifurcation_curve(
     param_to : float, optional
         End of the one-parameter search in ``param`` (default: the end of its valid range above
         the model's value).
-    start : SpecialPoint, mapping or LimitCycle, optional
-        A special point of ``kind`` to start from (skips the search), or the gait (guess or
-        solved cycle) to start the search from.
+    start : SpecialPoint, mapping, LimitCycle or OptimalGait, optional
+        A special point of ``kind`` to start from (skips the search), or the gait (guess,
+        solved cycle or optimal gait, as ``model``) to start the search from.
     steps : int
         Period of the gait in steps.
     at : sequence of float
@@ -116,6 +120,9 @@ def bifurcation_curve(
     """
     if kind not in CURVE_KINDS:
         raise GaitoptInputError(f"`kind` must be one of {', '.join(CURVE_KINDS)}, got {kind!r}")
+    if is_optimal_gait(model) or is_optimal_gait(start):  # its open loop (profile held fixed)
+        start = as_limit_cycle(start if is_optimal_gait(start) else model, tol=tol, verify=verify)
+        model = start.model
     path1 = ParameterPath.of(model, param)
     path2 = param2 if isinstance(param2, ParameterPath) else ParameterPath.of(model, param2)
     if path2.name == path1.name or set(path1.parameters) & set(path2.parameters):

@@ -9,6 +9,8 @@ holds (a step that lasts longer keeps its final input).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 __all__ = ["InputProfile"]
@@ -43,6 +45,30 @@ class InputProfile:
             coeffs.append(np.polyfit(nodes, np.asarray(U, dtype=float).T, len(tau) - 1))
         breaks = np.append(np.asarray(starts, dtype=float), starts[-1] + lengths[-1])
         return cls(breaks, np.array(coeffs))
+
+    def as_dict(self) -> dict[str, list]:
+        """``{"breaks": [...], "coefficients": [...]}`` in plain JSON types (s; input units per
+        power of s), exactly: :meth:`from_dict` rebuilds the same profile bit for bit."""
+        return {"breaks": self.breaks.tolist(), "coefficients": self.coefficients.tolist()}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> InputProfile:
+        """The profile :meth:`as_dict` wrote (``ValueError`` where the arrays do not fit)."""
+        breaks = np.asarray(data["breaks"], dtype=float)
+        coefficients = np.asarray(data["coefficients"], dtype=float)
+        if (
+            breaks.ndim != 1
+            or coefficients.ndim != 3
+            or breaks.size != coefficients.shape[0] + 1
+            or not np.all(np.diff(breaks) > 0)
+            or not np.all(np.isfinite(coefficients))
+        ):
+            raise ValueError(
+                f"an input profile needs increasing breaks and (intervals, degree + 1, inputs) "
+                f"finite coefficients, one interval fewer than breaks; got {breaks.size} breaks "
+                f"and coefficients of shape {coefficients.shape}"
+            )
+        return cls(breaks, coefficients)
 
     def _locate(self, t: float) -> tuple[int, float]:
         i = int(np.searchsorted(self.breaks, t, side="right")) - 1

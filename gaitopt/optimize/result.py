@@ -281,6 +281,7 @@ class OptimalGait(Gait):
             "speed": self.speed,
             "fixed_point": self.fixed_point,
             "inputs": self.inputs,
+            "profiles": [prof.as_dict() for prof in self.profiles],  # exact: breaks, coefficients
             "multipliers": [complex(m) for m in self.multipliers],  # [re, im] in JSON
             "multipliers_fd": [complex(m) for m in self.multipliers_fd],
             "stable": self.stable,
