@@ -32,6 +32,7 @@ from .verify import (
     profiles,
     simulated_cost,
 )
+from .work_check import check_work, dense_work
 
 #: The simulated return must be the fixed point to this, relative to ``1 + max |x*|``.
 RETURN_TOL = 1e-6
@@ -88,6 +89,8 @@ def _certify(
         orbit=orbit,
     )
     problem_msg = check_dense(col, sol)
+    if problem_msg is None:  # exact-work optima: the positive work between the nodes too
+        problem_msg = check_work(col, sol)
     if problem_msg is None and problem.cost_kind in ("work", "cot") and col.structure is None:
         B = col.blocks
         overlap = max(
@@ -123,6 +126,10 @@ def _certify(
         "cost_error": verdict.cost_error,
         "period_simulated": verdict.period_simulated,
     }
+    if col.structure is not None and problem.cost_kind in ("work", "cot"):
+        work = dense_work(col, sol)  # checked above (check_work); reported with the referee's
+        result.verification["positive_work_dense"] = work["positive_work_dense"]
+        result.verification["hidden_work"] = work["hidden_work"]
     result.verified = bool(verdict.ok)
 
     A = return_map_jacobian(col, w, p)
