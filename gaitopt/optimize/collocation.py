@@ -494,6 +494,7 @@ class Collocation:
                     braking = (node_kinds == NEGATIVE) & np.repeat(signed, d, axis=1)
                     brake_terms.append(ca.mtimes(ca.sum1(ca.DM(braking.astype(float)) * Uk**2), wq))
                 work_terms.append(problem.impulse_work(i, x_end, u_end, p))
+                touch_rows(self, k, i, Xk, Uk, p, label, add)  # guards' touch points, if cut
             else:
                 if structure is not None and any(any(a.bounds) for x in structure for a in x):
                     self._bound_arcs(k, Xk, Uk, p, label, add)  # the arcs of input bounds
