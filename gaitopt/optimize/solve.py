@@ -31,6 +31,7 @@ from .attempt import (
     attempt,
 )
 from .certify import _certify
+from .collapsed import move_collapsed_arcs, warm_start
 from .collocation import Collocation, RadauMesh
 from .guess import check_warm_start
 from .problem import _WHY_STEPS, MAX_STEPS, GaitProblem, as_problem
@@ -520,32 +521,26 @@ def _finish(
                 f"; the {arcs} did not converge "
                 f"({stats_exact.get('return_status')}): refined without them"
             )
-    coarse = (col, w, stats)
+    coarse = (col, w)
     col, w, stats, cost_error, orbit_error, refinements = _refine(col, w, stats, tol)
     disc_error = max(cost_error, orbit_error)
     if problem.cost_kind in ("work", "cot") and not disc_error <= tol:
         # An exact-work optimum whose refinement did not settle: a guard touched inside its
-        # phase (the kneed walker's knee straight for an instant before it strikes) is a kink
-        # no mesh interval follows; made a junction, the refinement converges (guard_touches).
-        source = coarse[:2]
-        touched = guard_touch_structure(*source, p)
-        if touched is None:  # not seen on the coarse mesh: on the finest
-            source = (col, w)
-            touched = guard_touch_structure(*source, p)
-        if touched is not None:
-            cut = _collocation(problem, RadauMesh(sum(a.intervals for a in touched[0]),
-                                                  col.d), touched)  # fmt: skip
-            w_cut, stats_cut = _run(cut, cut.from_solution(*source, p), p)
-            if _converged(stats_cut):
-                again = _refine(cut, w_cut, stats_cut, tol)
-                if max(again[3], again[4]) < disc_error:
-                    col, w, stats, cost_error, orbit_error, refinements = again
-                    disc_error = max(cost_error, orbit_error)
-                    names = dict.fromkeys(n for arcs in touched for a in arcs for n in a.touches)
-                    structure_note = (
-                        f"; arcs of the power signs {_describe(touched)}; touch points of "
-                        f"{', '.join(names)} made junctions"
-                    )
+        # phase is a kink no mesh interval follows (made a junction: guard_touch_structure); a
+        # last arc collapsed against a phase change is a jump the continuous inputs forbid
+        # there (continued into the next phase: collapsed.move_collapsed_arcs).  A new
+        # structure is kept only if its refinement settles further.
+        for cut, w_start, note in _retry_structures(problem, coarse[0], coarse[1], col, w, p):
+            w_cut, stats_cut = _run(cut, w_start, p)
+            if not _converged(stats_cut):
+                continue
+            again = _refine(cut, w_cut, stats_cut, tol)
+            if max(again[3], again[4]) < disc_error:
+                col, w, stats, cost_error, orbit_error, refinements = again
+                disc_error = max(cost_error, orbit_error)
+                structure_note = note
+            if disc_error <= tol:
+                break
     result = _certify(problem, col, w, stats, verify=verify)
     col.certify_limits(w, result)  # state bounds and path constraints: dense check, where active
     # The final transcription and its solution (the stabilising design differentiates it).
@@ -592,6 +587,46 @@ def _describe_arcs(structure: list, inputs: tuple[str, ...]) -> str:
     if touches:
         words.append(f"touch points of {', '.join(touches)} made junctions")
     return "; ".join(words)
+
+
+def _retry_structures(
+    problem: GaitProblem,
+    coarse: Collocation,
+    w_coarse: np.ndarray,
+    fine: Collocation,
+    w_fine: np.ndarray,
+    p: np.ndarray,
+) -> Any:
+    """Transcriptions to try where an exact-work refinement did not settle, with warm starts
+    and the structure note: the guards' touch points made junctions (read off the coarse
+    solution, else the finest), then collapsed last arcs continued into the next phase."""
+    for col, w in ((coarse, w_coarse), (fine, w_fine)):
+        touched = guard_touch_structure(col, w, p)
+        if touched is not None:
+            names = dict.fromkeys(n for arcs in touched for a in arcs for n in a.touches)
+            cut = _collocation(problem, RadauMesh(sum(a.intervals for a in touched[0]), col.d),
+                               touched)  # fmt: skip
+            yield (
+                cut,
+                cut.from_solution(col, w, p),
+                (
+                    f"; arcs of the power signs {_describe(touched)}; touch points of "
+                    f"{', '.join(names)} made junctions"
+                ),
+            )
+            break
+    moved = move_collapsed_arcs(coarse, w_coarse)
+    if moved is not None:
+        cut = _collocation(problem, RadauMesh(sum(a.intervals for a in moved[0]), coarse.d),
+                           moved)  # fmt: skip
+        yield (
+            cut,
+            warm_start(cut, coarse, w_coarse, p),
+            (
+                f"; arcs of the power signs {_describe(moved)} (a last arc collapsed against the "
+                f"phase change continued into the next phase)"
+            ),
+        )
 
 
 def _refine(
