@@ -85,26 +85,32 @@ def _collocation(
     return col
 
 
-def _solver(col: Collocation) -> ca.Function:
+def _solver(col: Collocation, obj_scale: float | None = None) -> ca.Function:
     """IPOPT on the transcription's NLP, built once per NLP structure: transcriptions of
     statements that differ only in the fixed period, step length or speed share it (their values are
-    the bounds ``lbg = ubg`` of their rows, passed with each solve)."""
-    key = (_statement_key(col.problem, values=False), col.mesh, repr(col.structure))
+    the bounds ``lbg = ubg`` of their rows, passed with each solve).  ``obj_scale``: IPOPT's
+    ``obj_scaling_factor`` (default: IPOPT's own, 1)."""
+    key = (_statement_key(col.problem, values=False), col.mesh, repr(col.structure), obj_scale)
     solver = _SOLVERS.pop(key, None)
     if solver is None:
+        options = dict(_IPOPT)
+        if obj_scale is not None:
+            options["ipopt.obj_scaling_factor"] = float(obj_scale)
         if col.node_blocks:  # exact derivatives assembled from the compiled node kernels
             f, g = col.outer
-            solver = split_solver("gait", col._w, col._p, f, g, col.node_blocks, _IPOPT)
+            solver = split_solver("gait", col._w, col._p, f, g, col.node_blocks, options)
         else:
-            solver = ca.nlpsol("gait", "ipopt", col.nlp, _IPOPT)
+            solver = ca.nlpsol("gait", "ipopt", col.nlp, options)
     _SOLVERS[key] = solver  # most recently used last
     while len(_SOLVERS) > _CACHED_TRANSCRIPTIONS:
         _SOLVERS.pop(next(iter(_SOLVERS)))
     return solver
 
 
-def _run(col: Collocation, w0: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, dict[str, Any]]:
-    solver = _solver(col)
+def _run(
+    col: Collocation, w0: np.ndarray, p: np.ndarray, obj_scale: float | None = None
+) -> tuple[np.ndarray, dict[str, Any]]:
+    solver = _solver(col, obj_scale)
     w0 = fill_sensitivities(col, np.clip(w0, col.lbx, col.ubx), p)  # ρ(A) ≤ R's unknowns
     sol = solver(x0=w0, p=p, lbx=col.lbx, ubx=col.ubx, lbg=col.lbg, ubg=col.ubg)
     return np.asarray(sol["x"], dtype=float).ravel(), dict(solver.stats())

@@ -63,11 +63,13 @@ def move_collapsed_arcs(col: Any, w: np.ndarray) -> list[list[Arc]] | None:
         bounds = tuple(
             0 if r in idle else b for r, b in enumerate(before.bounds or (0,) * len(signs))
         )
+        changed = True
+        if signs == first.signs and tuple(bounds) == tuple(first.bounds or (0,) * len(signs)):
+            continue  # the next phase begins alike: the sliver was all there was to it
         arcs[k + 1] = [Arc(ARC_INTERVALS, signs, CONTINUED, bounds if any(bounds) else ()),
                        *arcs[k + 1]]  # fmt: skip
         thetas[k + 1] = np.concatenate([[CONTINUED * float(np.sum(thetas[k + 1]))],
                                         thetas[k + 1]])  # fmt: skip
-        changed = True
     if not changed:
         return None
     total = max(sum(a.intervals for a in phase) for phase in arcs)

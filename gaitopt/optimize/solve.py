@@ -11,6 +11,7 @@ with ``success=False`` naming the constraint that cannot be met.
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import replace
@@ -530,11 +531,19 @@ def _finish(
         # last arc collapsed against a phase change is a jump the continuous inputs forbid
         # there (continued into the next phase: collapsed.move_collapsed_arcs).  A new
         # structure is kept only if its refinement settles further.
-        for cut, w_start, note in _retry_structures(problem, coarse[0], coarse[1], col, w, p):
-            w_cut, stats_cut = _run(cut, w_start, p)
+        # First of all the same arcs with the objective scaled to about 1 (IPOPT's
+        # obj_scaling_factor): a cost of transport of 0.01 leaves a direction along which the
+        # cost is nearly flat pinned by IPOPT's tolerance only to ~1e-7 of the orbit.
+        scale = 1.0 / max(abs(coarse[0].unpack(coarse[1], p)["cost"]), 1e-6)
+        scale = scale if scale > 2.0 else None
+        tries = _retry_structures(problem, coarse[0], coarse[1], col, w, p)
+        if scale is not None:
+            tries = itertools.chain([(coarse[0], coarse[1], structure_note)], tries)
+        for cut, w_start, note in tries:
+            w_cut, stats_cut = _run(cut, w_start, p, scale)
             if not _converged(stats_cut):
                 continue
-            again = _refine(cut, w_cut, stats_cut, tol)
+            again = _refine(cut, w_cut, stats_cut, tol, scale)
             if max(again[3], again[4]) < disc_error:
                 col, w, stats, cost_error, orbit_error, refinements = again
                 disc_error = max(cost_error, orbit_error)
@@ -630,19 +639,24 @@ def _retry_structures(
 
 
 def _refine(
-    col: Collocation, w: np.ndarray, stats: dict[str, Any], tol: float
+    col: Collocation,
+    w: np.ndarray,
+    stats: dict[str, Any],
+    tol: float,
+    obj_scale: float | None = None,
 ) -> tuple[Collocation, np.ndarray, dict[str, Any], float, float, int]:
     """Mesh doubling from ``col``'s solution ``w`` until cost and orbit change by at most
     ``tol`` (relative) or :data:`_MAX_REFINEMENTS` doublings are done: the finest converged
     transcription, its solution and statistics, the last cost and orbit changes (inf if no
-    refinement converged) and the number of doublings."""
+    refinement converged) and the number of doublings (``obj_scale``: IPOPT's objective
+    scaling factor, default its own)."""
     p = col.problem.model.p
     sol = col.unpack(w, p)
     cost_error = orbit_error = float("inf")
     refinements = 0
     while refinements < _MAX_REFINEMENTS:
         fine = _refined(col)
-        w_fine, stats_fine = _run(fine, fine.from_solution(col, w, p), p)
+        w_fine, stats_fine = _run(fine, fine.from_solution(col, w, p), p, obj_scale)
         if not _converged(stats_fine):
             break
         sol_fine = fine.unpack(w_fine, p)
