@@ -102,8 +102,13 @@ def row_of(v: float, attempts: list[dict]) -> tuple[list, dict]:
     if i is None:
         row = [v, None, None, None, None, None, None, False, None, None, "none", flag, listing,
                failed]  # fmt: skip
-        return row, {"speed": v, "start": None, "different_minima": flag, "gait": None,
-                     "attempts": [{k: x for k, x in a.items() if k != "gait"} for a in attempts]}
+        return row, {
+            "speed": v,
+            "start": None,
+            "different_minima": flag,
+            "gait": None,
+            "attempts": [{k: x for k, x in a.items() if k != "gait"} for a in attempts],
+        }
     gait = attempts[i]["gait"]
     mu = float(np.max(np.abs(gait.multipliers))) if gait.multipliers is not None else None
     push = float(np.asarray(gait.inputs["push_off"])[-1])

@@ -58,9 +58,7 @@ def test_push_off_momentum(model, push):
     assert new == pytest.approx(before + push * _cross(hip - contact, axis), abs=1e-12)
     hip_after = np.asarray(model.phases[0].points(after, model.p), dtype=float)[:, 2]
     trailing = _momentum(model, 1, x, hip, which=(1, 2))
-    assert _momentum(model, 0, after, hip_after, which=(3, 4)) == pytest.approx(
-        trailing, abs=1e-12
-    )
+    assert _momentum(model, 0, after, hip_after, which=(3, 4)) == pytest.approx(trailing, abs=1e-12)
 
 
 def test_push_off_work(model):
