@@ -66,7 +66,12 @@ stance leg and the swing thigh, +τ_h on the thigh and −τ_h on the stance leg
 ``Q = (−τ_h, τ_h − τ_k, τ_k)`` in the three-link phase and ``(−τ_h, τ_h)`` with the knee
 locked, where the knee torque acts on a latched joint and does nothing.  The stance push uses
 the actuated accelerations.  Powers: ``τ_h (q̇2 − q̇1)`` and ``τ_k (q̇3 − q̇2)`` (0 with the
-knee locked).
+knee locked).  ``push_off`` P (N·s, ≥ 0; Kuo 2002): an impulse along the trailing (stance)
+leg's axis at the hip just before heel strike, on the floating walker (an impulsive input of the
+heel strike, :attr:`~gaitopt.HybridModel.impulsive_inputs`; its work, the kinetic energy it
+adds, is :meth:`KneedWalker.impulse_work`); an optional input
+(:attr:`~gaitopt.HybridModel.optional_inputs`): an optimisation leaves it at 0 unless its
+``bounds`` name it.
 
 **Section:** just after heel strike, ``q2 = q3 = 2γ − q1`` and ``q̇3 = q̇2``; free coordinates
 ``q1, q1_dot, q2_dot`` (3 nontrivial multipliers).
