@@ -103,6 +103,10 @@ class HybridModel:
     #: the work :meth:`impulse_work` says it does to the work-based costs.  Empty (default):
     #: none; every input acts in the flow.
     impulsive_inputs: ClassVar[tuple[str, ...]] = ()
+    #: Inputs an optimisation leaves off (held at 0) unless its ``bounds`` name them (the kneed
+    #: walker's push-off impulse: its gaits and optima with hip and knee torques stay what they
+    #: were without it).  Empty (default): every input is free within its bounds.
+    optional_inputs: ClassVar[tuple[str, ...]] = ()
     #: Phase 0's states, the section's free coordinates and the section's definition exactly as
     #: :meth:`build` makes them, declared so that ``gaitopt list`` shows them without building
     #: the model (the Strandbeest's linkage takes seconds): :meth:`declared_structure`.  The

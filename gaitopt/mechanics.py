@@ -195,6 +195,8 @@ def impact_velocity(
     contact: ca.SX,
     *,
     contact_slip: ca.SX | None = None,
+    impulse: tuple[ca.SX, ca.SX] | None = None,
+    contact_impulse: bool = False,
 ) -> ca.SX:
     """Post-impact generalised velocities for a plastic impact of point ``contact``.
 
@@ -221,11 +223,21 @@ def impact_velocity(
     contact_slip : casadi.SX, optional
         Velocity of the striking material point minus ``d(contact)/dt`` (2×1, linear in ``qd``);
         default zero (a point foot).
+    impulse : (casadi.SX, casadi.SX), optional
+        ``(point, P)``: an external impulse ``P`` (N·s, 2×1, world frame) applied at ``point``
+        (an expression of ``q``) together with the impact, on the floating system — Kuo's (2002)
+        push-off along the trailing leg just before heel strike.  The impulse equations are
+        linear, so "just before" and "together" give the same ``q̇⁺``:
+        ``M (q̇_e⁺ − q̇_e⁻) = J_cᵀ Λ + J_pᵀ P``, ``J_c q̇_e⁺ = 0``.  Default: none (the
+        expressions are those without it).
+    contact_impulse : bool
+        Also return the striking point's impulse ``Λ`` (N·s, 2×1, world frame).
 
     Returns
     -------
     casadi.SX
-        ``q̇⁺``, the generalised velocities just after impact (same coordinates as ``q``).
+        ``q̇⁺``, the generalised velocities just after impact (same coordinates as ``q``); with
+        ``contact_impulse``, ``(q̇⁺, Λ)``.
     """
     base = ca.SX.sym("base", 2)
     base_d = ca.SX.sym("base_d", 2)
@@ -239,11 +251,39 @@ def impact_velocity(
     n = qe.shape[0]
     K = ca.blockcat([[M, -J.T], [J, ca.SX.zeros(2, 2)]])
     qde_minus = ca.vertcat(0, 0, qd)
-    rhs = ca.vertcat(M @ qde_minus, ca.SX.zeros(2, 1))
+    momentum = M @ qde_minus
+    if impulse is not None:  # Kuo's push-off: J_pᵀ P on the floating system
+        point, P = impulse
+        momentum = momentum + ca.jacobian(point + base, qe).T @ P
+    rhs = ca.vertcat(momentum, ca.SX.zeros(2, 1))
     sol = ca.solve(K, rhs)
     post = sol[2:n]
     # base and base_d do not appear in M or J (translation invariance); substitute to be sure.
-    return ca.substitute(post, ca.vertcat(base, base_d), ca.DM.zeros(4, 1))
+    zero = ca.DM.zeros(4, 1)
+    post = ca.substitute(post, ca.vertcat(base, base_d), zero)
+    if contact_impulse:
+        return post, ca.substitute(sol[n:], ca.vertcat(base, base_d), zero)
+    return post
+
+
+def impulse_work(
+    masses: Sequence[PointMass], q: ca.SX, qd: ca.SX, point: ca.SX, impulse: ca.SX
+) -> ca.SX:
+    """Work (J) an external impulse ``impulse`` (N·s, 2×1) at ``point`` (an expression of ``q``)
+    does on the floating system of ``masses`` (its base added as two free coordinates, at rest
+    before): the kinetic energy gained, ``P·v_p⁻ + ½ Pᵀ J_p M⁻¹ J_pᵀ P`` with ``v_p⁻ = J_p q̇``
+    (Kuo 2002's push-off work; for a point foot pinned before, ``v_p⁻ ⟂`` a push along the leg
+    and only the quadratic term remains)."""
+    base = ca.SX.sym("base", 2)
+    base_d = ca.SX.sym("base_d", 2)
+    qe = ca.vertcat(base, q)
+    qde = ca.vertcat(base_d, qd)
+    floating = [(m, r + base) for m, r in masses]
+    M = ca.hessian(kinetic_energy(floating, qe, qde), qde)[0]
+    Jp = ca.jacobian(point + base, qe)
+    v = Jp @ ca.vertcat(0, 0, qd)
+    gain = ca.dot(impulse, v) + 0.5 * ca.dot(impulse, Jp @ ca.solve(M, Jp.T @ impulse))
+    return ca.substitute(gain, ca.vertcat(base, base_d), ca.DM.zeros(4, 1))
 
 
 def bodies_function(

@@ -25,7 +25,8 @@ reported.  Attempts whose certified costs differ by more than :data:`SAME` (rela
 reached different local minima: the speed is flagged (``different_minima``, with every
 certified cost) in the CSV, the JSON and the printed output.  The cost of transport has several
 local minima in the gait and the optimiser returns whichever one its start leads to, as
-"optimal gait found": a single start, or a continuation from one side, is not enough.  A
+"optimal gait found": a single start, or a continuation from one side, is not enough
+(:func:`gaitopt.optimize.library.library_both_ends` runs it).  A
 biomechanics reader expects cost against speed to have a minimum (Ralston 1958; Srinivasan &
 Ruina 2006, Nature 439:72, for simple walking models).
 
@@ -57,6 +58,8 @@ import numpy as np  # noqa: E402
 import gaitopt  # noqa: E402
 from gaitopt.files import write_csv, write_json  # noqa: E402
 from gaitopt.optimize import GaitProblem, solve_problem  # noqa: E402
+from gaitopt.optimize.library import disagreement as _disagreement  # noqa: E402
+from gaitopt.optimize.library import library_both_ends, lowest, seed_of  # noqa: E402, F401
 from gaitopt.plotting import save_figure  # noqa: E402
 
 SLOPE = 0.03  # rad: a shallow slope (the passive gait's is 0.0504)
@@ -64,7 +67,6 @@ STEP = 0.47  # m, step length L (leg length 1 m)
 BOUNDS = {"hip_torque": 5.0, "knee_torque": 0.0}  # N·m: hip |τ| ≤ 5, knee passive
 SPEEDS = np.round(np.arange(0.68, 0.9801, 0.04), 3)  # m/s
 FAST_SPEEDS = np.array([0.80, 0.84])
-CHAINS = ("from above", "from below")  # the continuations, in the order of their first passes
 MAX_PASSES = 6  # chain passes in all (alternating); later passes re-solve only changed seeds
 # Relative: certified starts whose costs differ by more reached different local minima (the
 # same minimum from different starts agrees to the certificate's 1e-8 and better).
@@ -77,103 +79,23 @@ def problem_at(speed: float) -> GaitProblem:
     return GaitProblem(model, "cot", step_length=STEP, speed=float(speed), bounds=BOUNDS)
 
 
-def lowest(attempts: list[dict]) -> int | None:
-    """Index of the attempt whose certified optimum costs least (ties: the earliest), or None
-    where none is certified.  Each attempt is ``{"start", "success", "cost", ...}``."""
-    good = [i for i, a in enumerate(attempts) if a["success"]]
-    return min(good, key=lambda i: attempts[i]["cost"]) if good else None
-
-
-def seed_of(attempts: list[dict]) -> int | None:
-    """Index of the attempt a chain continues from: the lowest certified one, else the lowest
-    one that converged but whose checks rejected it (its orbit is a start like any other; what
-    it leads to is certified on its own), else None."""
-    i = lowest(attempts)
-    if i is not None:
-        return i
-    near = [i for i, a in enumerate(attempts) if a["converged_cost"] is not None]
-    return min(near, key=lambda i: attempts[i]["converged_cost"]) if near else None
-
-
 def disagreement(attempts: list[dict]) -> str:
     """Empty where the certified attempts agree to :data:`SAME` (or fewer than two are
     certified); else every certified attempt's cost, lowest first, e.g.
-    ``"from below 0.01942516336 < from above 0.04333637603"``."""
-    good = sorted((a["cost"], a["start"]) for a in attempts if a["success"])
-    if len(good) < 2 or good[-1][0] <= good[0][0] * (1 + SAME):
-        return ""
-    return " < ".join(f"{k} {c:.10g}" for c, k in good)
-
-
-def _solve(v: float, label: str, seed: tuple[float, int] | None, points: dict) -> None:
-    """Solve at ``v`` (cold, or warm started from attempt ``seed = (speed, index)``), append
-    the attempt to ``points[v]`` and print it."""
-    t0 = time.perf_counter()
-    guess = points[seed[0]][seed[1]]["gait"] if seed else None
-    gait = solve_problem(problem_at(v), guess=guess)
-    elapsed = time.perf_counter() - t0
-    ok = bool(gait.success)
-    seed_text = None
-    if seed:
-        used = points[seed[0]][seed[1]]
-        seed_text = f"{seed[0]:.2f} {used['start']}" + ("" if used["success"] else " (rejected)")
-    converged = bool(gait.orbit) and gait.cost is not None and np.isfinite(gait.cost)
-    points[v].append({
-        "start": label,
-        "success": ok,
-        "cost": float(gait.cost) if ok else None,
-        "converged_cost": float(gait.cost) if converged else None,
-        "seed": seed_text,
-        "time_s": round(elapsed, 1),
-        "message": gait.message or "(the solver gave no reason)",
-        "gait": gait,
-    })  # fmt: skip
-    where = f" (seed {seed_text})" if seed else ""
-    result = (
-        f"certified, cot {gait.cost:.10g}, discretisation error {gait.discretisation_error:.1e}"
-        if ok
-        else f"FAILED: {gait.message}"
-    )
-    print(f"v = {v:.3f} m/s {label}{where}: {result} ({elapsed:.1f} s)", flush=True)
-
-
-def chain_pass(speeds: list[float], direction: str, points: dict, used: dict) -> int:
-    """One pass of the continuation ``direction`` ("from below": up in speed; "from above":
-    down): each speed warm started from :func:`seed_of` its neighbour behind it (or of the
-    nearest speed behind that has one), unless this chain already started it from that speed at
-    the same cost (to :data:`SAME`): the same minimum again; returns the number of solves."""
-    order = speeds if direction == "from below" else speeds[::-1]
-    seed_speed, solves = None, 0
-    for j, v in enumerate(order):
-        if j and seed_of(points[order[j - 1]]) is not None:
-            seed_speed = order[j - 1]
-        if seed_speed is None:
-            continue
-        seed = (seed_speed, seed_of(points[seed_speed]))
-        cost = points[seed_speed][seed[1]]["converged_cost"]
-        last = used.get((direction, v))
-        if last is not None and last[0] == seed_speed and abs(cost / last[1] - 1) <= SAME:
-            continue
-        used[direction, v] = (seed_speed, cost)
-        n = sum(a["start"].startswith(direction) for a in points[v])
-        _solve(v, direction if n == 0 else f"{direction}, pass {n + 1}", seed, points)
-        solves += 1
-    return solves
+    ``"from below 0.01942516336 < from above 0.04333637603"``
+    (:func:`gaitopt.optimize.library.disagreement`)."""
+    return _disagreement(attempts, SAME)
 
 
 def library(speeds: list[float]) -> dict[float, list[dict]]:
-    """Every attempt at every speed: a cold start, then the chains alternately
-    (:data:`CHAINS`) until two passes in a row solve nothing or :data:`MAX_PASSES` are done."""
-    points: dict[float, list[dict]] = {v: [] for v in speeds}
-    for v in speeds:
-        _solve(v, "cold", None, points)
-    used: dict[tuple[str, float], tuple[float, float]] = {}  # the seed each chain last used
-    idle = 0
-    for n in range(MAX_PASSES):
-        idle = 0 if chain_pass(speeds, CHAINS[n % 2], points, used) else idle + 1
-        if idle == 2:
-            break
-    return points
+    """Every attempt at every speed: a cold start, then the chains alternately until two
+    passes in a row solve nothing or :data:`MAX_PASSES` are done
+    (:func:`gaitopt.optimize.library.library_both_ends`)."""
+    return library_both_ends(
+        problem_at, speeds, max_passes=MAX_PASSES, same=SAME,
+        solve=lambda problem, guess=None: solve_problem(problem, guess=guess),
+        log=lambda text: print(f"v = {text}", flush=True),
+    )  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -124,7 +124,9 @@ def test_declared_knee_limits():
     kneed = gaitopt.model("kneed_walker")
     (flexion,) = kneed.phases[0].limits["knee_flexion"]
     assert flexion.at_start and flexion.at_end
-    assert float(flexion.function(x[:6], np.zeros(2), kneed.p)) == pytest.approx(0.1, abs=1e-15)
+    assert float(flexion.function(x[:6], np.zeros(len(kneed.inputs)), kneed.p)) == pytest.approx(
+        0.1, abs=1e-15
+    )
     assert not kneed.phases[1].limits
 
 

@@ -66,7 +66,12 @@ stance leg and the swing thigh, +τ_h on the thigh and −τ_h on the stance leg
 ``Q = (−τ_h, τ_h − τ_k, τ_k)`` in the three-link phase and ``(−τ_h, τ_h)`` with the knee
 locked, where the knee torque acts on a latched joint and does nothing.  The stance push uses
 the actuated accelerations.  Powers: ``τ_h (q̇2 − q̇1)`` and ``τ_k (q̇3 − q̇2)`` (0 with the
-knee locked).
+knee locked).  ``push_off`` P (N·s, ≥ 0; Kuo 2002): an impulse along the trailing (stance)
+leg's axis at the hip just before heel strike, on the floating walker (an impulsive input of the
+heel strike, :attr:`~gaitopt.HybridModel.impulsive_inputs`; its work, the kinetic energy it
+adds, is :meth:`KneedWalker.impulse_work`); an optional input
+(:attr:`~gaitopt.HybridModel.optional_inputs`): an optimisation leaves it at 0 unless its
+``bounds`` name it.
 
 **Section:** just after heel strike, ``q2 = q3 = 2γ − q1`` and ``q̇3 = q̇2``; free coordinates
 ``q1, q1_dot, q2_dot`` (3 nontrivial multipliers).
@@ -75,6 +80,7 @@ knee locked).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import casadi as ca
 import numpy as np
@@ -86,6 +92,7 @@ from ..mechanics import (
     constrained_impact_velocity,
     contact_force,
     impact_velocity,
+    impulse_work,
     kinetic_energy,
     lagrange_acceleration,
     potential_energy,
@@ -221,8 +228,12 @@ class KneedWalker(HybridModel):
     state_units = state_units(q1="rad", q2="rad", q3="rad")  # for axis labels
     title = "Kneed walker"
     reference = "Hsu Chen 2007; McGeer 1990; Tedrake, Underactuated Robotics"
-    inputs = ("hip_torque", "knee_torque")
-    input_units = ("N*m", "N*m")
+    inputs = ("hip_torque", "knee_torque", "push_off")
+    input_units = ("N*m", "N*m", "N*s")
+    impulsive_inputs = ("push_off",)
+    #: The push-off is off unless an optimisation bounds it (the torques' optima stay theirs).
+    optional_inputs = ("push_off",)
+    input_bounds: ClassVar[dict[str, tuple[float, float]]] = {"push_off": (0.0, float("inf"))}
     mesh = (4, 5)  # 20 RK8 steps per phase: discretisation error ~1e-11 at the defaults
 
     mass_hip: float = mass_parameter(0.5, "hip point mass m_h", _HSU_CHEN)
@@ -318,10 +329,18 @@ class KneedWalker(HybridModel):
         flow1 = sym.function(
             "flow", x1, ca.vertcat(rd, lagrange_acceleration(masses1, r, rd, g, tau1))
         )
-        # Heel strike with the knee locked; the striking arc rolls (no slip) from then on.
+        # Heel strike with the knee locked; the striking arc rolls (no slip) from then on.  Just
+        # before it, Kuo's (2002) push-off: an impulse P ≥ 0 along the trailing (stance) leg's
+        # axis, from its foot towards the hip, on the floating walker (the trailing foot leaves
+        # the ground); with the heel strike's impulse the equations are linear, so together or
+        # just before give the same velocities (mechanics.impact_velocity).  At P = 0 the
+        # passive heel strike exactly.
+        push_off = sym.input("push_off")
+        axis = _unit(p1)  # the stance leg's axis, foot → hip (through the arc centre)
         post = impact_velocity(
-            masses1, r, rd, geo1["swing_contact"], contact_slip=-R * p2d * geo1["tangent"]
-        )
+            masses1, r, rd, geo1["swing_contact"], contact_slip=-R * p2d * geo1["tangent"],
+            impulse=(geo1["hip"], push_off * axis),
+        )  # fmt: skip
         heel_strike = Transition(
             name="heel strike",
             guard=sym.function("guard", x1, 2 * gamma - p1 - p2),
@@ -380,16 +399,38 @@ class KneedWalker(HybridModel):
 
     def input_rates(self, phase: int) -> ca.Function:
         """The joint rates the torques do work on (rad/s): ``(q̇2 − q̇1, q̇3 − q̇2)`` in the
-        three-link phase, ``(q̇2 − q̇1, 0)`` with the knee locked."""
+        three-link phase, ``(q̇2 − q̇1, 0)`` with the knee locked; the push-off acts only in the
+        heel strike (its work is :meth:`impulse_work`): rate 0."""
         n_p = len(self.parameter_specs())
         p = ca.SX.sym("p", n_p)
         if phase == 0:
             x = ca.SX.sym("x", 6)
-            rates = ca.vertcat(x[4] - x[3], x[5] - x[4])
+            rates = ca.vertcat(x[4] - x[3], x[5] - x[4], ca.SX(0))
         else:
             x = ca.SX.sym("x", 4)
-            rates = ca.vertcat(x[3] - x[2], ca.SX(0))
+            rates = ca.vertcat(x[3] - x[2], ca.SX(0), ca.SX(0))
         return ca.Function("input_rates", [x, p], [rates], ["x", "p"], ["rates"])
+
+    def impulse_work(self, phase: int) -> ca.Function | None:
+        """The push-off's work (J) at heel strike (the two-link phase's cycle transition): the
+        floating walker's kinetic energy gained from the impulse ``P`` along the stance leg's
+        axis at the hip, ``P ê·v_hip⁻ + ½ P² êᵀ J M⁻¹ Jᵀ ê`` (:func:`~gaitopt.mechanics.
+        impulse_work`; for point feet ``v_hip⁻ ⟂ ê``); None in the three-link phase."""
+        if phase != 1:
+            return None
+        return _push_off_work(self)
+
+
+def _push_off_work(model: HybridModel) -> ca.Function:
+    """``impulse_work(x⁻, u, p) -> w`` of the two-link phase: the push-off's work (J)."""
+    sym = Symbols(model.parameter_specs(), model.inputs)
+    x, (p1, p2, p1d, p2d) = sym.states("q1", "q2", "q1_dot", "q2_dot")
+    geo = _walker(sym, p1, p2, p2)
+    work = impulse_work(
+        _masses(sym, geo), ca.vertcat(p1, p2), ca.vertcat(p1d, p2d), geo["hip"],
+        sym.input("push_off") * _unit(p1),
+    )  # fmt: skip
+    return ca.Function("impulse_work", [x, sym.u, sym.p], [work], ["x", "u", "p"], ["w"])
 
 
 def kneed_outline(model: HybridModel, phase: Phase, x: np.ndarray, pts: np.ndarray) -> np.ndarray:

@@ -85,19 +85,23 @@ def _collocation(
     return Collocation(problem, mesh, structure)
 
 
-def _solver_key(col: Collocation) -> tuple:
-    return (_statement_key(col.problem, values=False), col.mesh, repr(col.structure))
+def _solver_key(col: Collocation, obj_scale: float | None = None) -> tuple:
+    return (_statement_key(col.problem, values=False), col.mesh, repr(col.structure), obj_scale)
 
 
 @lru_by_key(_CACHED_TRANSCRIPTIONS, _solver_key)
-def _solver(col: Collocation) -> ca.Function:
+def _solver(col: Collocation, obj_scale: float | None = None) -> ca.Function:
     """IPOPT on the transcription's NLP, built once per NLP structure: transcriptions of
     statements that differ only in the fixed period, step length or speed share it (their values are
-    the bounds ``lbg = ubg`` of their rows, passed with each solve)."""
+    the bounds ``lbg = ubg`` of their rows, passed with each solve).  ``obj_scale``: IPOPT's
+    ``obj_scaling_factor`` (default: IPOPT's own, 1)."""
+    options = dict(_IPOPT)
+    if obj_scale is not None:
+        options["ipopt.obj_scaling_factor"] = float(obj_scale)
     if col.node_blocks:  # exact derivatives assembled from the compiled node kernels
         f, g = col.outer
-        return split_solver("gait", col._w, col._p, f, g, col.node_blocks, _IPOPT)
-    return ca.nlpsol("gait", "ipopt", col.nlp, _IPOPT)
+        return split_solver("gait", col._w, col._p, f, g, col.node_blocks, options)
+    return ca.nlpsol("gait", "ipopt", col.nlp, options)
 
 
 #: The caches themselves (``clear()`` empties one).
@@ -105,8 +109,10 @@ _COLLOCATIONS = _collocation.cache
 _SOLVERS = _solver.cache
 
 
-def _run(col: Collocation, w0: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, dict[str, Any]]:
-    solver = _solver(col)
+def _run(
+    col: Collocation, w0: np.ndarray, p: np.ndarray, obj_scale: float | None = None
+) -> tuple[np.ndarray, dict[str, Any]]:
+    solver = _solver(col, obj_scale)
     w0 = fill_sensitivities(col, np.clip(w0, col.lbx, col.ubx), p)  # ρ(A) ≤ R's unknowns
     sol = solver(x0=w0, p=p, lbx=col.lbx, ubx=col.ubx, lbg=col.lbg, ubg=col.ubg)
     return np.asarray(sol["x"], dtype=float).ravel(), dict(solver.stats())

@@ -159,6 +159,7 @@ def _work_arc_rows(
         braking = (node_kinds == NEGATIVE) & np.repeat(signed, d, axis=1)
         terms.brake.append(ca.mtimes(ca.sum1(ca.DM(braking.astype(float)) * Uk**2), wq))
     terms.work.append(problem.impulse_work(i, x_end, u_end, p))
+    touch_rows(col, k, i, Xk, Uk, p, label, add)  # guards' touch points, if cut
 
 
 def bound_arcs(col: Any, k: int, Xk: Any, Uk: Any, p: Any, label: str, add: Any) -> None:

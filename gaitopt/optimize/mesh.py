@@ -58,10 +58,11 @@ class OptimumTranscription(CollocationTranscription):
         return {"cost": cost_error, "orbit": orbit_error}
 
 
-def ipopt_solver(t: OptimumTranscription, w0: np.ndarray) -> Solved:
+def ipopt_solver(t: OptimumTranscription, w0: np.ndarray, obj_scale: float | None = None) -> Solved:
     """One IPOPT run on ``t``'s NLP from ``w0`` (:func:`gaitopt.optimize.attempt._run`):
-    converged where IPOPT solved to its tolerance or an acceptable level; ``info`` its stats."""
-    w, stats = _run(t.col, w0, t.p)
+    converged where IPOPT solved to its tolerance or an acceptable level; ``info`` its stats.
+    ``obj_scale``: IPOPT's ``obj_scaling_factor`` (default: its own)."""
+    w, stats = _run(t.col, w0, t.p, obj_scale)
     return Solved(w, _converged(stats), int(stats.get("iter_count", 0)), info=stats)
 
 

@@ -265,6 +265,8 @@ class GaitProblem:
             if name in declared:
                 low[j] = max(low[j], float(declared[name][0]))
                 high[j] = min(high[j], float(declared[name][1]))
+            if name in model.optional_inputs and name not in self.bounds:
+                low[j] = high[j] = 0.0  # off unless named (HybridModel.optional_inputs)
         return low, high
 
     @property

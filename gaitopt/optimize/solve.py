@@ -11,8 +11,10 @@ with ``success=False`` naming the constraint that cannot be met.
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections.abc import Callable, Sequence
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -32,6 +34,7 @@ from .attempt import (
     attempt,
 )
 from .certify import _certify
+from .collapsed import move_collapsed_arcs, warm_start
 from .collocation import Collocation, RadauMesh
 from .guess import check_warm_start
 from .mesh import OptimumTranscription, first_solution, ipopt_solver
@@ -41,7 +44,7 @@ from .result import Minimum, OptimalGait, StartRecord
 from .spectral_bound import with_roughness_budget
 from .spectral_certify import certify_spectral
 from .starts import mapped_starts
-from .state_arcs import detect_touches
+from .state_arcs import detect_touches, guard_touch_structure
 
 __all__ = [
     "optimize_gait",
@@ -535,18 +538,34 @@ def _finish(
                 f"; the {arcs} did not converge "
                 f"({stats_exact.get('return_status')}): refined without them"
             )
-    # The one sequence's refine stage (gaitopt.orbit.solve.refine), a posteriori: double the
-    # mesh (warm started) until the cost and the orbit change by less than ``tol``.
-    refinement = sequence.refine(
-        OptimumTranscription(col), w, solver=ipopt_solver, tol=tol,
-        max_refinements=_MAX_REFINEMENTS, first=first_solution(w, stats),
-    )  # fmt: skip
-    col, w, stats = refinement.transcription.col, refinement.w, refinement.info
-    sol = col.unpack(w, p)
-    refinements = refinement.refinements
-    cost_error = refinement.error_parts.get("cost", float("inf"))
-    orbit_error = refinement.error_parts.get("orbit", float("inf"))
-    disc_error = refinement.error
+    coarse = (col, w)
+    col, w, stats, cost_error, orbit_error, refinements = _refine(col, w, stats, tol)
+    disc_error = max(cost_error, orbit_error)
+    if problem.cost_kind in ("work", "cot") and not disc_error <= tol:
+        # An exact-work optimum whose refinement did not settle: a guard touched inside its
+        # phase is a kink no mesh interval follows (made a junction: guard_touch_structure); a
+        # last arc collapsed against a phase change is a jump the continuous inputs forbid
+        # there (continued into the next phase: collapsed.move_collapsed_arcs).  A new
+        # structure is kept only if its refinement settles further.
+        # First of all the same arcs with the objective scaled to about 1 (IPOPT's
+        # obj_scaling_factor): a cost of transport of 0.01 leaves a direction along which the
+        # cost is nearly flat pinned by IPOPT's tolerance only to ~1e-7 of the orbit.
+        scale = 1.0 / max(abs(coarse[0].unpack(coarse[1], p)["cost"]), 1e-6)
+        scale = scale if scale > 2.0 else None
+        tries = _retry_structures(problem, coarse[0], coarse[1], col, w, p)
+        if scale is not None:
+            tries = itertools.chain([(coarse[0], coarse[1], structure_note)], tries)
+        for cut, w_start, note in tries:
+            w_cut, stats_cut = _run(cut, w_start, p, scale)
+            if not _converged(stats_cut):
+                continue
+            again = _refine(cut, w_cut, stats_cut, tol, scale)
+            if max(again[3], again[4]) < disc_error:
+                col, w, stats, cost_error, orbit_error, refinements = again
+                disc_error = max(cost_error, orbit_error)
+                structure_note = note
+            if disc_error <= tol:
+                break
     result = _certify(problem, col, w, stats, verify=verify)
     col.certify_limits(w, result)  # state bounds and path constraints: dense check, where active
     # The final transcription and its solution (the stabilising design differentiates it).
@@ -565,7 +584,7 @@ def _finish(
         result.message = (
             f"no certified optimum: the discretisation error {disc_error:.2g} (cost and orbit "
             f"under mesh refinement) stays above the target {tol:g} after {refinements} "
-            f"refinements; the optimum is known only to about that (cost {sol['cost']:.10g}). "
+            f"refinements; the optimum is known only to about that (cost {result.cost:.10g}). "
             f"Loosen `tol` to accept it, or bound the inputs so the optimum is smoother. "
             + result.message
         )
@@ -593,3 +612,70 @@ def _describe_arcs(structure: list, inputs: tuple[str, ...]) -> str:
     if touches:
         words.append(f"touch points of {', '.join(touches)} made junctions")
     return "; ".join(words)
+
+
+def _retry_structures(
+    problem: GaitProblem,
+    coarse: Collocation,
+    w_coarse: np.ndarray,
+    fine: Collocation,
+    w_fine: np.ndarray,
+    p: np.ndarray,
+) -> Any:
+    """Transcriptions to try where an exact-work refinement did not settle, with warm starts
+    and the structure note: the guards' touch points made junctions (read off the coarse
+    solution, else the finest), then collapsed last arcs continued into the next phase."""
+    for col, w in ((coarse, w_coarse), (fine, w_fine)):
+        touched = guard_touch_structure(col, w, p)
+        if touched is not None:
+            names = dict.fromkeys(n for arcs in touched for a in arcs for n in a.touches)
+            cut = _collocation(problem, RadauMesh(sum(a.intervals for a in touched[0]), col.d),
+                               touched)  # fmt: skip
+            yield (
+                cut,
+                cut.from_solution(col, w, p),
+                (
+                    f"; arcs of the power signs {_describe(touched)}; touch points of "
+                    f"{', '.join(names)} made junctions"
+                ),
+            )
+            break
+    moved = move_collapsed_arcs(coarse, w_coarse)
+    if moved is not None:
+        cut = _collocation(problem, RadauMesh(sum(a.intervals for a in moved[0]), coarse.d),
+                           moved)  # fmt: skip
+        yield (
+            cut,
+            warm_start(cut, coarse, w_coarse, p),
+            (
+                f"; arcs of the power signs {_describe(moved)} (a last arc collapsed against the "
+                f"phase change continued into the next phase)"
+            ),
+        )
+
+
+def _refine(
+    col: Collocation,
+    w: np.ndarray,
+    stats: dict[str, Any],
+    tol: float,
+    obj_scale: float | None = None,
+) -> tuple[Collocation, np.ndarray, dict[str, Any], float, float, int]:
+    """The one sequence's refine stage (:func:`gaitopt.orbit.solve.refine`), a posteriori: the
+    mesh doubled (warm started) from ``col``'s solution ``w`` until the cost and the orbit
+    change by at most ``tol`` (relative) or :data:`_MAX_REFINEMENTS` doublings are done.
+    Returns the finest converged transcription, its solution and statistics, the last cost and
+    orbit changes (inf if no refinement converged) and the number of doublings (``obj_scale``:
+    IPOPT's objective scaling factor, default its own)."""
+    refinement = sequence.refine(
+        OptimumTranscription(col), w, solver=partial(ipopt_solver, obj_scale=obj_scale), tol=tol,
+        max_refinements=_MAX_REFINEMENTS, first=first_solution(w, stats),
+    )  # fmt: skip
+    return (
+        refinement.transcription.col,
+        refinement.w,
+        refinement.info,
+        refinement.error_parts.get("cost", float("inf")),
+        refinement.error_parts.get("orbit", float("inf")),
+        refinement.refinements,
+    )

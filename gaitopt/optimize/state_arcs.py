@@ -38,7 +38,15 @@ import numpy as np
 from ..hybrid import rate_along
 from .radau import Arc
 
-__all__ = ["detect_touches", "touch_rows", "limit_functions", "describe_touches", "touch_times"]
+__all__ = [
+    "detect_touches",
+    "touch_rows",
+    "limit_functions",
+    "guard_functions",
+    "guard_touch_structure",
+    "describe_touches",
+    "touch_times",
+]
 
 #: Mesh intervals given to each new arc a touch point opens (before refinement).
 TOUCH_INTERVALS = 2
@@ -67,6 +75,31 @@ def limit_functions(col: Any, i: int) -> list[tuple[str, ca.Function]]:
     return out
 
 
+def guard_functions(col: Any, i: int) -> list[tuple[str, ca.Function]]:
+    """``(label, c)`` of the side ``c = −direction · g ≥ 0`` of model phase ``i``'s cycle
+    transition guard ``g`` when it has no admissibility test (the kneed walker's knee strike:
+    the knee flexion ``q3 − q2``): the transcription keeps it at the phase's interior nodes, and
+    an optimum may touch it there (the knee straight for an instant before it strikes); the
+    label is ``"'knee strike' guard side >= 0"``."""
+    tr = col.model.phases[i].transitions[0]
+    if tr.admissible is not None:
+        return []
+    phase = col.model.phases[i]
+    n, n_u, n_p = phase.n, len(col.model.inputs), phase.flow.size1_in(2)
+    x, u, p = ca.SX.sym("x", n), ca.SX.sym("u", n_u), ca.SX.sym("p", n_p)
+    c = -tr.direction * tr.guard(x, u, p)
+    return [(f"'{tr.name}' guard side >= 0", ca.Function("c", [x, u, p], [c]))]
+
+
+def guard_touch_structure(col: Any, w: np.ndarray, p: np.ndarray) -> list[list[Arc]] | None:
+    """The arcs of a solved exact-work transcription ``col`` (``w``) cut at the interior touch
+    points of its guards' sides (:func:`guard_functions`), the touches made junctions with
+    ``ċ = 0`` there (:func:`touch_rows`); None without a structure or a touch."""
+    if col.structure is None:
+        return None
+    return detect_touches(col, w, p, col.structure, functions=guard_functions)
+
+
 def _interior_minima(c: np.ndarray, tol: float) -> list[int]:
     """Indices of the interior local minima of the samples ``c`` at most ``tol``, one per run
     of samples below ``tol`` (its lowest), a run that reaches either end excluded: there the
@@ -93,6 +126,7 @@ def detect_touches(
     structure: list[list[Arc]] | None,
     samples: int = 64,
     intervals: int = TOUCH_INTERVALS,
+    functions: Any = None,
 ) -> list[list[Arc]] | None:
     """The arcs of a solved transcription ``col`` (``w``) cut at the interior touch points of
     its state bounds and selected limits; None if there are none (``structure`` then stands).
@@ -104,7 +138,9 @@ def detect_touches(
     touch ends carries its label in :attr:`Arc.touches`.  The two parts of a cut arc share its
     intervals and ``intervals`` more by length (each at least ``intervals``); every phase then
     gets as many as the one with the most, the extra ones going to the arcs with the longest
-    intervals."""
+    intervals.  ``functions(col, i)``: the constraints to look at (default
+    :func:`limit_functions`; :func:`guard_functions` for the guards' sides)."""
+    functions = limit_functions if functions is None else functions
     sol = col.unpack(w, p)
     n_u = len(col.model.inputs)
     tn = np.linspace(0.0, 1.0, col.N * samples + 1)
@@ -112,7 +148,7 @@ def detect_touches(
     for k, i in enumerate(col.chain):
         X, U = col.evaluate(sol["X"][k], sol["U"][k], tn, sol["breaks"][k])
         found = []
-        for label, fn in limit_functions(col, i):
+        for label, fn in functions(col, i):
             c = np.asarray(fn.map(tn.size)(X, U, sol["p"]), dtype=float).ravel()
             tol = ACTIVE_TOL * (1 + float(np.max(np.abs(c))))
             found.extend((float(tn[j]), label) for j in _interior_minima(c, tol))
@@ -172,6 +208,8 @@ def touch_rows(col: Any, k: int, i: int, Xk: Any, Uk: Any, p: Any, label: str, a
     d = col.d
     flow = col.model.phases[i].flow
     functions = dict(limit_functions(col, i))
+    if any(name not in functions for arc in structure for name in arc.touches):
+        functions.update(guard_functions(col, i))
     end = 0
     for arc in structure[:-1]:
         end += arc.intervals

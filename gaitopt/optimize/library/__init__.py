@@ -30,9 +30,12 @@ events and cold-start checks, and their JSON), :mod:`~gaitopt.optimize.library.w
 along the values: :func:`gait_library`), :mod:`~gaitopt.optimize.library.events` (the reduced
 Hessian, and active-set changes, folds and ends located by bisection),
 :mod:`~gaitopt.optimize.library.cold` (the cold-start checks) and
-:mod:`~gaitopt.optimize.library.workers` (problems as plain data, the tasks and multi-starts).
+:mod:`~gaitopt.optimize.library.workers` (problems as plain data, the tasks and multi-starts);
+:mod:`~gaitopt.optimize.library.both_ends` (:func:`library_both_ends`: cold starts and chains
+from both ends, the lowest certified optimum per value, different local minima flagged).
 """
 
+from .both_ends import disagreement, library_both_ends, lowest, seed_of
 from .events import reduced_hessian
 from .records import CONSTRAINTS, ColdCheck, GaitLibrary, LibraryEvent, LibraryPoint
 from .walk import gait_library
@@ -40,6 +43,10 @@ from .workers import cold_task, dask_starts, start_task
 
 __all__ = [
     "gait_library",
+    "library_both_ends",
+    "lowest",
+    "seed_of",
+    "disagreement",
     "GaitLibrary",
     "LibraryPoint",
     "LibraryEvent",
