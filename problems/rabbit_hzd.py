@@ -194,7 +194,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     folder = Path(args.out) / "rabbit_hzd"
     folder.mkdir(parents=True, exist_ok=True)
-    resolutions = (101,) if args.fast else (201, 401)
+    resolutions = (101,) if args.fast else (101, 201)
     gains = (20.0,) if args.fast else (10.0, 20.0, 40.0, 80.0)
     starts, steps = (2, 6) if args.fast else (6, 20)
 

@@ -185,3 +185,61 @@ def test_three_link_speed_library_continues_the_optimum():
     for v, g in got.items():
         assert g.speed == pytest.approx(v, abs=1e-8)
     assert got[0.45].cost > got[0.525].cost < got[0.6].cost
+
+
+def _study(name: str, out: Path) -> Path:
+    import importlib.util
+
+    path = Path(__file__).resolve().parent.parent / "problems" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"study_{name}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert module.main(["--out", str(out), "--fast"]) == 0
+    return out / name
+
+
+@pytest.mark.slow  # ~3 min: one SLSQP design (101 phases) and a five-link full-order gait
+def test_rabbit_hzd_study_fast(tmp_path):
+    # Sources: independent methods.  The design (Simpson on 101 phases) against the full-order
+    # closed loop at ω_n = 20: its period = the zero dynamics' step time (1e-5 s: the coarse
+    # quadrature's error), one multiplier = δ² (1e-6), hybrid invariance (residual ≤ 1e-10,
+    # Westervelt et al. 2007 eqs (6.37)); the effort by DOP853 along the closed loop against the
+    # quadrature (1e-4 relative on 101 phases); RABBIT's conditions on the orbit's dense samples
+    # (N > 0, the friction cone); perturbed runs return to the gait (distance shrinks 100×).
+    folder = _study("rabbit_hzd", tmp_path)
+    d = json.loads((folder / "rabbit_hzd.json").read_text(encoding="utf-8"))
+    design = d["design"]
+    assert design["speed_m_s"] == pytest.approx(0.75, abs=1e-6)
+    assert design["mid_step_foot_m"] >= 0.1 - 1e-8 and design["max_abs_torque_Nm"] <= 100 + 1e-6
+    assert d["invariance_residual"] < 1e-10
+    assert d["simulated_effort"] == pytest.approx(design["effort_N2m2s"], rel=1e-4)
+    import csv
+
+    rows = list(csv.DictReader((folder / "rabbit_hzd.csv").open(encoding="utf-8")))
+    row = rows[0]
+    assert row["verified"] == "True"
+    assert float(row["period_s"]) == pytest.approx(design["step_time_s"], abs=1e-5)
+    assert float(row["mu_minus_slope"]) < 1e-6
+    assert float(row["min_normal_force_N"]) > 0 and float(row["min_friction_margin_N"]) > 0
+    assert d["perturbed"]["all_returned"]
+    for name in ("outputs.png", "torques.png", "zero_dynamics.png", "perturbed.csv"):
+        assert (folder / name).stat().st_size > 0
+
+
+@pytest.mark.slow  # ~1 min: two three-link starts and a three-point speed library
+def test_hzd_multistart_study_fast(tmp_path):
+    # Start 0 is problems/three_link_hzd_optimal.py's SLSQP run (928.3563 N²·m·s, 1e-4
+    # relative); every listed minimum verified on the full-order loop (μ = δ² to 1e-6); the
+    # library's points meet their speeds (they are SLSQP's equality constraints, 1e-8 m/s).
+    folder = _study("hzd_multistart", tmp_path)
+    d = json.loads((folder / "hzd_multistart.json").read_text(encoding="utf-8"))
+    three = d["three_link_walker"]
+    assert all(m["verified"] for m in three["minima"])
+    zero = three["minima"][three["starts"][0]["minimum"]]
+    assert zero["cost"] == pytest.approx(928.3563, rel=1e-4)
+    import csv
+
+    for row in csv.DictReader((folder / "library.csv").open(encoding="utf-8")):
+        assert row["success"] == "True"
+        assert float(row["achieved_speed_m_s"]) == pytest.approx(float(row["speed_m_s"]), abs=1e-8)
+    assert (folder / "library.png").stat().st_size > 0
