@@ -243,3 +243,37 @@ def test_hzd_multistart_study_fast(tmp_path):
         assert row["success"] == "True"
         assert float(row["achieved_speed_m_s"]) == pytest.approx(float(row["speed_m_s"]), abs=1e-8)
     assert (folder / "library.png").stat().st_size > 0
+
+
+def _readme_table(header: str) -> list[list[str]]:
+    """The body rows of the README table whose header row begins with ``header``."""
+    readme = (RESULTS.parent.parent / "README.md").read_text(encoding="utf-8")
+    table = readme[readme.index(header) :].split("\n\n", 1)[0]
+    rows = [line for line in table.splitlines()[2:] if line.startswith("|")]
+    return [[c.strip() for c in line.replace("\\|", "").strip("|").split("|")] for line in rows]
+
+
+def _as_printed(text: str, value: float) -> bool:
+    """Whether ``text`` is ``value`` rounded to the significant digits ``text`` shows."""
+    import re
+
+    mantissa = re.split(r"[eE]", text)[0]
+    digits = len(re.sub(r"[^0-9]", "", mantissa).lstrip("0"))
+    return float(text) == float(f"{value:.{digits}g}")
+
+
+def test_readme_rabbit_table_is_the_committed_study_output():
+    # Every number of the README's RABBIT table is results/rabbit_hzd/rabbit_hzd.csv (written
+    # by problems/rabbit_hzd.py) rounded as printed.
+    import csv
+
+    with open(RESULTS / "rabbit_hzd.csv", encoding="utf-8") as f:
+        committed = {float(r["omega_n"]): r for r in csv.DictReader(f)}
+    rows = _readme_table("| ω_n (rad/s) | period (s) | μ (the slope's multiplier)")
+    assert len(rows) == len(committed) == 4
+    keys = ["period_s", "mu_slope", "mu_minus_slope", "max_abs_other_mu", "max_abs_torque_Nm",
+            "min_normal_force_N", "min_friction_margin_N"]  # fmt: skip
+    for row in rows:
+        r = committed[float(row[0])]
+        for text, key in zip(row[1:], keys, strict=True):
+            assert _as_printed(text, float(r[key])), (row[0], key, text, r[key])
