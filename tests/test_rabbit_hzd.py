@@ -147,6 +147,13 @@ def test_cli_bad_hzd_input_is_one_line_exit_2(capsys, argv, option):
     assert err.count("\n") == 1 and option in err, err
 
 
+@pytest.mark.parametrize("argv", [["--design"], ["--speed", "0.5"], ["--spread", "0.2"]])
+def test_cli_design_options_need_the_hzd_controller(capsys, argv):
+    code = main(["solve", "three_link_walker", *argv])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and argv[0] in err, err
+
+
 def test_cli_design_refuses_an_unactuated_model(capsys):
     code = main(["solve", "compass_gait", "--controller", "hzd", "--design"])
     err = capsys.readouterr().err

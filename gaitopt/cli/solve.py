@@ -124,6 +124,11 @@ def run_solve(args: argparse.Namespace) -> int:
     model = build_model(args.model, args.set)
     if args.controller == "hzd":
         return _run_hzd(model, args)
+    for option, used in (("--design", args.design), ("--speed", args.speed is not None),
+                         ("--spread", args.spread != 0.1)):  # fmt: skip
+        if used:
+            raise InputError(f"{option}: only with --controller hzd (an HZD design); add "
+                             f"--controller hzd or leave it out")  # fmt: skip
     guess = parse_guess(model, args.guess)
     try:
         with _solver_output_to_stderr():
