@@ -212,7 +212,7 @@ def test_rabbit_hzd_study_fast(tmp_path):
     # quadrature's error), one multiplier = δ² (1e-6), hybrid invariance (residual ≤ 1e-10,
     # Westervelt et al. 2007 eqs (6.37)); the effort by DOP853 along the closed loop against the
     # quadrature (1e-4 relative on 101 phases); RABBIT's conditions on the orbit's dense samples
-    # (N > 0, the friction cone); perturbed runs return to the gait (distance shrinks 100×).
+    # (N > 0, the friction cone); perturbed runs approach the gait.
     folder = _study("rabbit_hzd", tmp_path)
     d = json.loads((folder / "rabbit_hzd.json").read_text(encoding="utf-8"))
     design = d["design"]
@@ -228,7 +228,15 @@ def test_rabbit_hzd_study_fast(tmp_path):
     assert float(row["period_s"]) == pytest.approx(design["step_time_s"], abs=1e-5)
     assert float(row["mu_minus_slope"]) < 1e-6
     assert float(row["min_normal_force_N"]) > 0 and float(row["min_friction_margin_N"]) > 0
-    assert d["perturbed"]["all_returned"]
+    # Perturbed runs (fast: 2 starts, 6 steps): none falls, each ends closer to the fixed point
+    # than half its start (δ²⁶ ≈ 0.10; the full run's ratios after 6 steps are 0.005–0.29).
+    runs: dict[str, dict[int, float]] = {}
+    for r in csv.DictReader((folder / "perturbed.csv").open(encoding="utf-8")):
+        runs.setdefault(r["start"], {})[int(r["step"])] = float(r["distance"])
+    steps = d["perturbed"]["steps"]
+    assert len(runs) == d["perturbed"]["starts"]
+    for run in runs.values():
+        assert -1 not in run and run[steps] < 0.5 * run[0]
     for name in ("outputs.png", "torques.png", "zero_dynamics.png", "perturbed.csv"):
         assert (folder / name).stat().st_size > 0
 
