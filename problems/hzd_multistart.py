@@ -9,11 +9,13 @@ swing foot ≥ 0.1 m at mid-step, ``|u| ≤ 100 N·m``, ``N ≥ 0``, ``|F_t| ≤
 ``gaitopt.hzd.rabbit``).  For each:
 
 * **multi-start**: 8 starts (seed 0; start 0 the problem's start, the others perturbed by
-  U(−0.1, 0.1) rad in every free coefficient, all in one box of bounds), every distinct minimum
+  U(−0.1, 0.1) rad in every free coefficient, redrawn until the start walks, all in one box of
+  bounds: the three-link start ± 0.3 rad, the five-link biped's |q| ≤ π/2), every distinct minimum
   listed cheapest first with its cost, restricted-map slope, speed and whether the full-order
   closed loop (ω_n = 20 rad/s) certifies it with μ₁ = δ² (``Minimum.verified``);
 * **speed library**: the cheapest minimum continued in its average speed (natural-parameter
-  continuation, each point warm-started from its neighbour), cost and slope against speed.
+  continuation, each point warm-started from its neighbour, in the same box), cost and slope
+  against speed.
 
     python problems/hzd_multistart.py --out results [--fast]
 
@@ -40,7 +42,7 @@ from gaitopt.plotting import save_figure  # noqa: E402
 MINIMA = ["model", "minimum", "objective", "cost", "slope", "speed_m_s", "step_time_s",
           "step_length_m", "max_abs_torque_Nm", "starts", "at_bound", "verified",
           "full_order_period_s", "full_order_mu_minus_slope"]  # fmt: skip
-STARTS = ["model", "start", "converged", "cost", "minimum", "message"]
+STARTS = ["model", "start", "draws", "converged", "cost", "minimum", "message"]
 LIBRARY = ["model", "speed_m_s", "objective", "cost", "slope", "step_time_s", "step_length_m",
            "max_abs_torque_Nm", "achieved_speed_m_s", "success"]  # fmt: skip
 UNITS = {"per_length": "(1/L)∫‖u‖² dt (N²·m·s)", "effort": "∫‖u‖² dt (N²·m²·s)"}
@@ -96,8 +98,8 @@ def main(argv: list[str] | None = None) -> int:
                                    omega_n=20.0, points=points)  # fmt: skip
         minima_rows += _minima_rows(name, result)
         for s in result.starts:
-            start_rows.append([name, s["start"], s["converged"], s["cost"], s["minimum"],
-                               s["message"]])  # fmt: skip
+            start_rows.append([name, s["start"], s["draws"], s["converged"], s["cost"],
+                               s["minimum"], s["message"]])  # fmt: skip
         summary[name] = {"degree": degree, "points": points, **result.as_dict()}
         if not result.minima:
             continue

@@ -25,7 +25,13 @@ import numpy as np
 from ..errors import GaitoptInputError
 from ..hybrid import HybridModel
 from ..shooting import find_limit_cycle
-from .design import SurfaceGait, coefficient_bounds, free_interior, optimise_alpha
+from .design import (
+    SurfaceGait,
+    coefficient_bounds,
+    free_interior,
+    optimise_alpha,
+    surface_gait,
+)
 from .gait import HZDGait, fit_to_orbit, hzd_gait
 from .invariance import make_invariant
 from .rabbit import RABBIT, rabbit_start
@@ -143,6 +149,35 @@ def design_problem(
     )
 
 
+#: Draws of a perturbation per start before the start is given up (each one quadrature).
+MAX_DRAWS = 50
+
+
+def _walking_start(
+    start: VirtualConstraintModel,
+    free: Sequence[str],
+    x0: np.ndarray,
+    rng: np.random.Generator,
+    spread: float,
+    points: int,
+) -> tuple[VirtualConstraintModel | None, int]:
+    """The first of up to :data:`MAX_DRAWS` perturbations ``x0 + U(−spread, spread)`` whose zero
+    dynamics walk (a start must be a gait: SLSQP cannot leave a region where the surface has no
+    fixed point, its cost and constraints being flat there); ``(None, draws)`` if none does.
+    ``spread`` 0: the start itself."""
+    for draw in range(1, MAX_DRAWS + 1):
+        shift = rng.uniform(-spread, spread, x0.size) if spread else np.zeros_like(x0)
+        model = start.replace(**dict(zip(free, map(float, x0 + shift), strict=True)))
+        try:
+            if surface_gait(model, points).walks:
+                return model, draw
+        except Exception:  # noqa: BLE001 — a perturbation where the surface breaks: draw again
+            pass
+        if not spread:
+            break
+    return None, MAX_DRAWS if spread else 1
+
+
 def _same(a: SurfaceGait, b: SurfaceGait, objective: str) -> bool:
     ca_, cb = (a.cost, b.cost) if objective == "per_length" else (a.effort, b.effort)
     close_cost = abs(ca_ - cb) <= 1e-6 * max(abs(ca_), abs(cb))
@@ -174,7 +209,7 @@ def multistart_design(
     starts : int
         Number of starts, 1 to :data:`MAX_STARTS`; start 0 is the problem's start, start ``k``
         adds ``U(−spread, spread)`` (rad) to each free coefficient (``numpy.random.default_rng
-        (seed)``).
+        (seed)``), redrawn (up to :data:`MAX_DRAWS` times) until its zero dynamics walk.
     seed : int
         The perturbations' seed.
     spread : float
@@ -210,18 +245,23 @@ def multistart_design(
     outcomes: list[dict[str, Any]] = []
     objective = options["objective"]
     for k in range(starts):
-        shift = np.zeros_like(x0) if k == 0 else rng.uniform(-spread, spread, x0.size)
-        model = start.replace(**dict(zip(free, map(float, x0 + shift), strict=True)))
+        model, draws = _walking_start(start, free, x0, rng, spread if k else 0.0, points)
+        if model is None:
+            why = f"no walking start in {draws} draws (no fixed point that reaches θ⁻)"
+            outcomes.append({"start": k, "converged": False, "cost": None, "minimum": None,
+                             "draws": draws, "message": why})  # fmt: skip
+            continue
         try:
             result = optimise_alpha(model, free, **options)
         except Exception as exc:  # noqa: BLE001 — a start where the surface breaks
+            why = f"{type(exc).__name__}: {exc}"[:200]
             outcomes.append({"start": k, "converged": False, "cost": None, "minimum": None,
-                             "message": f"{type(exc).__name__}: {exc}"[:200]})  # fmt: skip
+                             "draws": draws, "message": why})  # fmt: skip
             continue
         opt = result.optimum
         value = opt.cost if objective == "per_length" else opt.effort
         entry = {"start": k, "converged": result.success, "cost": value if result.success
-                 else None, "minimum": None, "message": result.message}  # fmt: skip
+                 else None, "minimum": None, "draws": draws, "message": result.message}  # fmt: skip
         if result.success:
             for i, m in enumerate(minima):
                 if _same(m.design, opt, objective):
@@ -263,14 +303,17 @@ def speed_library(
 ) -> list[tuple[float, SurfaceGait | None, str]]:
     """The design problem's optimum at each average speed of ``speeds`` (m/s, in the order
     given), each warm-started from the previous optimum (the first from ``start``, default the
-    problem's start); ``(speed, optimum or None, message)`` per speed.  A failed point leaves
-    the next one to start from the last success."""
+    problem's start), all within the problem's box of bounds (:func:`design_problem`'s start
+    ± 0.3 rad, or the plant's angle bounds); ``(speed, optimum or None, message)`` per speed.
+    A failed point leaves the next one to start from the last success."""
     speeds = [float(v) for v in speeds]
     if not speeds or not all(math.isfinite(v) and v > 0 for v in speeds):
         raise GaitoptInputError(f"speeds: {speeds!r} must be positive speeds (m/s), e.g. "
                                 f"0.4 0.5 0.6")  # fmt: skip
     first, free, options = design_problem(plant, degree, speed=speeds[0], points=points)
     model = first if start is None else start
+    # One box for every point: the problem's (around its start, or the plant's angle bounds).
+    options["bounds"] = coefficient_bounds(first, free, options.pop("reach", 0.3))
     out: list[tuple[float, SurfaceGait | None, str]] = []
     for v in speeds:
         options["speed"] = v
