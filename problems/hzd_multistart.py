@@ -106,8 +106,8 @@ def main(argv: list[str] | None = None) -> int:
         best = result.minima[0].design
         v0 = round(best.speed, 3)
         if name == "three_link_walker":
-            down = [v0, 0.5, 0.45, 0.4] if not args.fast else [v0, 0.45]
-            up = [0.55, 0.6, 0.65] if not args.fast else [0.6]
+            down = [v0, 0.5, 0.45, 0.4] if not args.fast else [v0]
+            up = [0.55, 0.6, 0.65] if not args.fast else [0.55, 0.6]
         else:
             down = [0.75, 0.7, 0.65, 0.6]
             up = [0.8, 0.85, 0.9]
