@@ -292,3 +292,32 @@ def test_readme_rabbit_table_is_the_committed_study_output():
         r = committed[float(row[0])]
         for text, key in zip(row[1:], keys, strict=True):
             assert _as_printed(text, float(r[key])), (row[0], key, text, r[key])
+
+
+def test_readme_speed_library_table_is_the_committed_study_output():
+    # Every number of the README's speed-library table is results/hzd_multistart/library.csv
+    # (problems/hzd_multistart.py) rounded as printed; an empty cell is a speed not run or not
+    # reached (success False in the CSV).
+    import csv
+
+    path = RESULTS.parent / "hzd_multistart" / "library.csv"
+    with open(path, encoding="utf-8") as f:
+        rows = [r for r in csv.DictReader(f) if r["success"] == "True"]
+    readme = (RESULTS.parent.parent / "README.md").read_text(encoding="utf-8")
+    table = readme[readme.index("| speed (m/s) | 0.525") :].split("\n\n", 1)[0].splitlines()
+    speeds = [float(c) for c in table[0].strip("|").split("|")[1:]]
+    cells = {line.strip("|").split("|")[0].strip(): line.strip("|").split("|")[1:]
+             for line in table[2:]}  # fmt: skip
+    model = {"three-link": "three_link_walker", "RABBIT": "five_link_biped"}
+    checked = 0
+    for label, values in cells.items():
+        name, what = label.rsplit(" ", 1)
+        key = "slope" if what == "δ²" else "cost"
+        by_speed = {float(r["speed_m_s"]): r for r in rows if r["model"] == model[name]}
+        for v, text in zip(speeds, values, strict=True):
+            if text.strip():
+                assert _as_printed(text.strip(), float(by_speed[v][key])), (label, v, text)
+                checked += 1
+            else:
+                assert v not in by_speed
+    assert checked == 22
