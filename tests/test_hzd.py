@@ -243,13 +243,16 @@ def test_the_five_link_biped_closes_the_loop_too():
     # "Any actuated model": the five-link biped (an open loop in its four torques) under degree-5
     # constraints, phase variable (q1 + q2)/2.  I/O linearisation against central differences of
     # ẏ along the flow (h = 1e-5, 1e-4 at these gains); its own constraints (swing-foot
-    # clearance, stance-foot push) carry over, evaluated with the feedback torques; and with no
+    # clearance, stance-foot push) carry over, evaluated with the feedback torques, with the
+    # closed loop's friction cone (tests/test_rabbit_hzd.py); and with no
     # gait of its own to fit, hzd_gait asks for the coefficients (one line naming alpha).
     plant = gaitopt.model("five_link_biped")
     model = virtual_constraint_model(plant, 5)(omega_n=6.0, zeta=1.0)
     assert [c.name for c in model.phases[0].constraints] == [
         "swing foot above the ground",
         "stance foot pushes on the ground",
+        "stance foot does not slip forward",  # the closed loop's friction cone (μ = 0.6)
+        "stance foot does not slip backward",
     ]
     flow = model.phases[0].flow
     rng = np.random.default_rng(7)

@@ -76,6 +76,16 @@ def _solve_arguments(parser: argparse.ArgumentParser) -> None:
                      help="damping ratio ζ (> 0)")  # fmt: skip
     hzd.add_argument("--torque-limit", type=float, default=None, metavar="NM",
                      help="refuse a gait that needs more than this |u| (N·m)")  # fmt: skip
+    hzd.add_argument("--design", action="store_true",
+                     help="optimise the Bézier coefficients over the zero dynamics (the model's "
+                     "design problem: three_link_walker, or five_link_biped's RABBIT problem) "
+                     "from --starts seeded starts and certify every distinct minimum")  # fmt: skip
+    hzd.add_argument("--speed", type=float, default=None, metavar="V",
+                     help="--design: average speed to keep (m/s; five_link_biped: "
+                     "0.75)")  # fmt: skip
+    hzd.add_argument("--spread", type=float, default=0.1, metavar="R",
+                     help="--design: half-width of the starts' perturbations (rad, default "
+                     "0.1)")  # fmt: skip
     parser.add_argument(
         "--scheduler",
         type=_scheduler_address,
@@ -114,6 +124,11 @@ def run_solve(args: argparse.Namespace) -> int:
     model = build_model(args.model, args.set)
     if args.controller == "hzd":
         return _run_hzd(model, args)
+    for option, used in (("--design", args.design), ("--speed", args.speed is not None),
+                         ("--spread", args.spread != 0.1)):  # fmt: skip
+        if used:
+            raise InputError(f"{option}: only with --controller hzd (an HZD design); add "
+                             f"--controller hzd or leave it out")  # fmt: skip
     guess = parse_guess(model, args.guess)
     try:
         with _solver_output_to_stderr():
@@ -150,7 +165,10 @@ def _run_hzd(model, args: argparse.Namespace) -> int:
         for option, used in (
             ("--guess", bool(args.guess)),
             ("--steps", args.steps != 1),
-            ("--starts", args.starts != 1),
+            ("--starts", args.starts != 1 and not args.design),
+            ("--seed", args.seed != 0 and not args.design),
+            ("--speed", args.speed is not None and not args.design),
+            ("--spread", args.spread != 0.1 and not args.design),
             ("--method", args.method != "newton"),
             ("--scheduler", args.scheduler is not None),
         )
@@ -181,7 +199,12 @@ def _run_hzd(model, args: argparse.Namespace) -> int:
         "zeta": "--zeta",
         "torque_limit": "--torque-limit",
         "model": "MODEL",
+        "starts": "--starts",
+        "spread": "--spread",
+        "speed": "--speed",
     }
+    if args.design:
+        return _run_hzd_design(model, args, phase, options)
     try:
         with _solver_output_to_stderr():
             gait = hzd_gait(model, args.degree, phase_variable=phase, omega_n=args.omega_n,
@@ -210,3 +233,48 @@ def _run_hzd(model, args: argparse.Namespace) -> int:
             ]
         )  # fmt: skip
     return EXIT_OK if gait.success else EXIT_NOT_FOUND
+
+
+def _run_hzd_design(model, args: argparse.Namespace, phase, options: dict[str, str]) -> int:
+    """``solve --controller hzd --design``: every distinct minimum of the model's HZD design
+    problem from ``--starts`` seeded starts, each certified on the full-order closed loop
+    (:func:`gaitopt.hzd.multistart.multistart_design`)."""
+    from ..errors import GaitoptInputError
+    from ..hzd.multistart import multistart_design
+
+    if phase is not None:
+        raise InputError("--phase-variable: --design uses the model's own phase variable; "
+                         "leave it out")  # fmt: skip
+    for name, value in (("--omega-n", args.omega_n), ("--zeta", args.zeta)):
+        if value is not None and not value > 0:
+            raise InputError(f"{name}: {value!r} must be a positive number, e.g. 10")
+    try:
+        with _solver_output_to_stderr():
+            result = multistart_design(
+                model, args.degree, starts=args.starts, seed=args.seed, spread=args.spread,
+                speed=args.speed, omega_n=args.omega_n or 20.0, zeta=args.zeta,
+            )  # fmt: skip
+    except GaitoptInputError as exc:
+        text = str(exc)
+        option = options.get(text.split(":", 1)[0])
+        raise InputError(
+            text if option is None else f"{option}: {text.split(':', 1)[1].strip()}"
+        ) from None
+    ok = any(m.verified for m in result.minima)
+    if args.json:
+        _print_json({"model": model.name, "success": ok, "degree": args.degree,
+                     **result.as_dict()})  # fmt: skip
+    else:
+        unit = "N²·m·s" if result.objective == "per_length" else "N²·m²·s"
+        print(f"{model.name}: HZD design, degree {args.degree}, {args.starts} start(s), seed "
+              f"{args.seed}: {len(result.minima)} distinct minimum/minima")  # fmt: skip
+        for k, m in enumerate(result.minima, start=1):
+            d = m.as_dict(result.objective)
+            print(f"    {k}. cost {d['cost']:.8g} {unit}  slope {d['slope']:.7f}  speed "
+                  f"{d['speed']:.6g} m/s  step {d['step_time']:.7g} s  max |u| "
+                  f"{d['max_torque']:.5g} N·m  verified {d['verified']}  starts "
+                  f"{', '.join(map(str, m.starts))}")  # fmt: skip
+        for s in result.starts:
+            if s["minimum"] is None:
+                print(f"    start {s['start']}: no minimum ({s['message']})")
+    return EXIT_OK if ok else EXIT_NOT_FOUND

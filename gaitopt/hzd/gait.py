@@ -137,7 +137,7 @@ def hzd_gait(
     phase_variable: Mapping[str, float] | None = None,
     omega_n: float | None = None,
     zeta: float | None = None,
-    alpha: Mapping[str, np.ndarray] | None = None,
+    alpha: Mapping[str, np.ndarray] | VirtualConstraintModel | None = None,
     invariant: bool = True,
     torque_limit: float | None = None,
 ) -> HZDGait:
@@ -154,9 +154,11 @@ def hzd_gait(
         ``{state: c_i}`` of ``θ = c·q``; default the plant's.
     omega_n, zeta : float, optional
         Gains ``K_p = ω_n²``, ``K_d = 2ζω_n`` (rad/s, 1; > 0); defaults the closed loop's.
-    alpha : mapping, optional
+    alpha : mapping or VirtualConstraintModel, optional
         Coefficients by joint (rad) instead of the fit (``theta_plus``/``theta_minus`` then
-        from :func:`make_invariant`, so ``invariant`` must hold).
+        from :func:`make_invariant`, so ``invariant`` must hold, starting from the closed
+        loop's defaults), or a closed loop of the same class (a design, e.g.
+        :func:`~.design.optimise_alpha`'s optimum) whose coefficients and phase range are used.
     invariant : bool
         Make the constraints hybrid invariant (default True).
     torque_limit : float, optional
@@ -189,7 +191,12 @@ def hzd_gait(
         if not invariant:
             raise GaitoptInputError("invariant: given coefficients are made invariant; "
                                     "pass invariant=True")  # fmt: skip
-        model = model.with_alpha(alpha)
+        if isinstance(alpha, VirtualConstraintModel):
+            # A whole design (optimise_alpha's optimum): its coefficients and phase range.
+            model = model.with_alpha(alpha.alpha, theta_plus=alpha.theta_plus,
+                                     theta_minus=alpha.theta_minus)  # fmt: skip
+        else:
+            model = model.with_alpha(alpha)
     if invariant:
         model = make_invariant(model)
     residual = invariance_residual(model)

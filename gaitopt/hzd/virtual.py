@@ -249,7 +249,7 @@ class VirtualConstraintModel(HybridModel):
             constraints = tuple(
                 dataclasses.replace(c, function=wrap("constraint", c.function))
                 for c in phase0.constraints
-            )
+            ) + _friction(sym, phase0, x, ca.vertcat(qd, qdd), pb, plant)
         elif hasattr(plant, "ground_reaction"):
             push = plant.ground_reaction()(q, qd, qdd, pb)
             constraints = (
@@ -289,6 +289,32 @@ class VirtualConstraintModel(HybridModel):
                                       ["det"]),
         }  # fmt: skip
         return (phase,), section
+
+
+def _friction(sym: Symbols, phase0: Phase, x: ca.SX, xdot: ca.SX, pb: ca.SX, plant: type) -> tuple:
+    """The stance foot's friction cone ``|F_t| ≤ μ F_n`` as two unilateral constraints
+    ``μ F_n ∓ F_t ≥ 0`` (N), with the contact force of the whole walker (Newton's second law,
+    ``F = Σ m_i (r̈_i + g ŷ)``, ``r̈_i = ∂v_i/∂x · ẋ`` along the closed loop) resolved on the
+    ground line of slope ``γ`` (normal ``(sin γ, cos γ)``, tangent ``(cos γ, −sin γ)``); none for a
+    plant without point masses (``Phase.bodies``)."""
+    if phase0.bodies is None:
+        return ()
+    m, _, v = phase0.bodies(x, pb)
+    specs = [s.name for s in plant.parameter_specs()]
+    g = pb[specs.index("gravity")] if "gravity" in specs else 9.81
+    gamma = pb[specs.index("slope")] if "slope" in specs else 0.0
+    acc = ca.reshape(ca.jtimes(ca.vec(v), x, xdot), v.shape[0], v.shape[1])
+    force = (acc + ca.repmat(ca.vertcat(0, g), 1, v.shape[1])) @ m
+    normal = ca.sin(gamma) * force[0] + ca.cos(gamma) * force[1]
+    tangent = ca.cos(gamma) * force[0] - ca.sin(gamma) * force[1]
+    mu = sym.friction_coefficient
+    source = "Coulomb friction at the stance foot (Westervelt et al. 2007, §6.6.2: |F_T| ≤ μ F_N)"
+    return (
+        sym.constraint("stance foot does not slip forward", x, mu * normal - tangent,
+                       "stance foot slips", unit="N", source=source),
+        sym.constraint("stance foot does not slip backward", x, mu * normal + tangent,
+                       "stance foot slips", unit="N", source=source),
+    )  # fmt: skip
 
 
 def virtual_constraint_model(
@@ -355,6 +381,11 @@ def virtual_constraint_model(
         ("theta_minus", float, parameter(defaults.get("theta_minus", 0.3), doc="phase variable "
                                          "θ at the end of a step (s = 1)", **angle)),
     ]  # fmt: skip
+    if len(cls.inputs) == cls.manipulator().size1_in(2):  # an open loop: its friction cone
+        fields.append(("friction_coefficient", float, parameter(
+            defaults.get("friction_coefficient", 0.6), unit="1", doc="Coulomb friction "
+            "coefficient μ of the stance foot (|F_t| ≤ μ F_n)", source="RABBIT's μ = 0.6 (FROST)",
+            low=0.0, high=100.0)))  # fmt: skip
     for j in joints:
         for k in range(degree + 1):
             name = alpha_name(j, k)

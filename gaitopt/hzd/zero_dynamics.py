@@ -196,7 +196,7 @@ def restricted_map(model: VirtualConstraintModel, points: int = 401) -> Restrict
 
         run = solve_ivp(timed, (tp, theta_m), [delta**2 * fixed, 0.0], method="DOP853",
                         rtol=1e-12, atol=1e-14)  # fmt: skip
-        step_time = float(run.y[1, -1])
+        step_time = abs(float(run.y[1, -1]))  # θ may decrease over the step
     return RestrictedMap(
         theta_plus=tp,
         theta_minus=theta_m,
@@ -222,4 +222,6 @@ def fixed_point_state(model: VirtualConstraintModel, rmap: RestrictedMap) -> np.
     if rmap.fixed_point is None:
         raise ValueError("the restricted map has no fixed point")
     sigma_plus = rmap.delta * np.sqrt(2 * rmap.fixed_point)
-    return surface_state(model, rmap.theta_plus, sigma_plus / rmap.inertia[0])
+    # θ̇⁺ has the sign of θ⁻ − θ⁺ (θ runs from θ⁺ to θ⁻), |θ̇⁺| = |σ⁺ / I(θ⁺)|.
+    sign = np.sign(rmap.theta_minus - rmap.theta_plus)
+    return surface_state(model, rmap.theta_plus, sign * abs(sigma_plus / rmap.inertia[0]))
