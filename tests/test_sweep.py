@@ -55,7 +55,9 @@ def test_dask_and_serial_give_identical_results(tmp_path):
 
 def test_resume_after_a_kill_loses_and_repeats_nothing(tmp_path):
     journal = tmp_path / "sweep.jsonl"
-    points = [dict(p, steps=40) for p in POINTS] * 2
+    # Enough points that the kill lands mid-sweep even with the compiled simulator (a few ms a
+    # point): the poll below sees three saved points 50 ms apart at most.
+    points = [dict(p, steps=40) for p in POINTS] * 30
     script = (
         "import json, sys; from gaitopt.simulation import simulate_task; "
         "from gaitopt.sweep import sweep; "
