@@ -49,10 +49,10 @@ __all__ = [
 ]
 
 #: The built-in models: name -> (module of this package, class), in the order ``gaitopt list``
-#: shows them.  A class's module is imported when the class is first asked for (``REGISTRY[name]``,
-#: ``gaitopt.model(name)``, ``gaitopt.models.CompassGait``), so ``import gaitopt`` and ``gaitopt solve
-#: compass_gait`` import one model file, not all of them (tests/test_models_registry.py checks this
-#: table against each class's ``name``).
+#: shows them.  A class's module is imported when the class is first asked for
+#: (``REGISTRY[name]``, ``gaitopt.model(name)``, ``gaitopt.models.CompassGait``), so ``import
+#: gaitopt`` and ``gaitopt solve compass_gait`` import one model file, not all of them
+#: (tests/test_import_cost.py checks this table against each class's ``name``).
 BUILTIN: dict[str, tuple[str, str]] = {
     "vanderpol": ("vanderpol", "VanDerPol"),
     "rimless_wheel": ("rimless_wheel", "RimlessWheel"),
