@@ -1,7 +1,7 @@
 """What a fresh process imports (issue 23): ``import gaitopt`` and ``gaitopt solve`` import only
-what they use.  Each check runs a new interpreter (``sys.modules`` of the test process holds everything
-the other tests imported) and asserts on the module names it reports — the property itself, not a
-timing."""
+what they use.  Each check runs a new interpreter (``sys.modules`` of the test process holds
+everything the other tests imported) and asserts on the module names it reports — the property
+itself, not a timing."""
 
 from __future__ import annotations
 
