@@ -64,8 +64,7 @@ def test_solve_path_imports_only_what_it_uses():
     subsystems above (the verification's simulation still imports ``scipy.integrate``: its
     stepper is SciPy's ``DOP853``)."""
     modules = _modules_after(
-        "import gaitopt\n"
-        "assert gaitopt.find_limit_cycle(gaitopt.model('compass_gait')).success"
+        "import gaitopt\nassert gaitopt.find_limit_cycle(gaitopt.model('compass_gait')).success"
     )
     assert _under(modules, *_NOT_ON_THE_SOLVE_PATH) == []
     models = [m for m in _under(modules, "gaitopt.models") if m != "gaitopt.models"]

@@ -96,11 +96,11 @@ def _lazy(help: str, module: str, add_arguments: str, run: str) -> Subcommand:
 #: Each subcommand: its one-line help (as its module's ``HELP`` where it has one:
 #: tests/test_cli_lazy.py checks they agree) and its module's two functions.
 SUBCOMMANDS: dict[str, Subcommand] = {
-    "list": _lazy(
-        "list the models and their parameters", "list_", "_list_arguments", "run_list"
-    ),
+    "list": _lazy("list the models and their parameters", "list_", "_list_arguments", "run_list"),
     "solve": _lazy(
-        "find a gait (periodic orbit) by multiple shooting", "solve", "_solve_arguments",
+        "find a gait (periodic orbit) by multiple shooting",
+        "solve",
+        "_solve_arguments",
         "run_solve",
     ),  # fmt: skip
     "simulate": _lazy(
@@ -129,8 +129,7 @@ SUBCOMMANDS: dict[str, Subcommand] = {
         "run",
     ),
     "optimize": _lazy(
-        "synthesise an optimal gait (least effort, work or cost of transport) with input "
-        "profiles",
+        "synthesise an optimal gait (least effort, work or cost of transport) with input profiles",
         "optimize",
         "add_arguments",
         "run",
