@@ -65,6 +65,7 @@ from . import basin as _bench_basin
 from . import branches as _bench_branches
 from . import curves as _bench_curves
 from . import first_call as _bench_first_call
+from . import goals as _bench_goals
 from . import optimize as _bench_optimize
 from . import simulate as _bench_simulate
 from . import speed as _bench_speed
@@ -101,6 +102,7 @@ def run(
     names = list(gaitopt.REGISTRY) if models is None else models
     drake, drake_import = _import_drake() if peers else (None, "disabled (--no-peers)")
     record: dict[str, Any] = {
+        "load_at_start": _bench_goals.load(),
         "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "command": " ".join([Path(sys.executable).name, "-m", "bench", *sys.argv[1:]]),
         "machine": _machine(),
@@ -191,6 +193,11 @@ def run(
         except Exception as err:  # report, never sink the benchmark
             record["basin"] = {"skipped": f"{type(err).__name__}: {err}"}
     record["goals_issue_12"] = _bench_speed.goals(record)
+    log("[bench] issue 23's goals: whole processes vs the baseline's, sweep vs bare Dask")
+    record["goals_issue_23_measured"] = _bench_goals.measure(
+        record, repeats=repeats, sweep=branches
+    )
+    record["goals_issue_23"] = _bench_goals.rows(record)
     record["elapsed_s"] = time.perf_counter() - started
     return record
 
