@@ -196,7 +196,9 @@ def _row(goal: str, measured: str, target: str, met: bool | None, source: str, *
 
 
 def _ms(s: float | None) -> str:
-    return "—" if s is None or not math.isfinite(s) else f"{1e3 * s:.3g} ms"
+    if s is None or not math.isfinite(s):
+        return "—"
+    return f"{s:.2f} s" if s >= 1 else f"{1e3 * s:.3g} ms"
 
 
 def rows(record: dict[str, Any]) -> list[dict[str, Any]]:
@@ -397,33 +399,19 @@ def rows(record: dict[str, Any]) -> list[dict[str, Any]]:
 
 
 def table(record: dict[str, Any]) -> str:
-    """The goals as printed lines, with the load."""
+    """The goals as printed lines (met: yes / no / n/a, the goal, measured, target), with the
+    load."""
     goal_rows = record.get("goals_issue_23") or rows(record)
-    head = ("goal", "measured", "target", "met")
-    body = [
-        (
-            r["goal"],
-            r["measured"],
-            r["target"],
-            "n/a"
-            if r["met"] is None
-            else ("yes" if r["met"] else "no")
-            + (" (CPU: yes)" if r.get("met_cpu") and not r["met"] else ""),
-        )
-        for r in goal_rows
-    ]
-    widths = [min(60, max(len(x[i]) for x in [head, *body])) for i in range(4)]
-    lines = ["Issue 23's goals, each measured in this run:"]
-    lines.append("  " + "  ".join(h.ljust(w) for h, w in zip(head, widths, strict=True)))
-    lines.append("  " + "  ".join("-" * w for w in widths))
-    for r in body:
-        lines.append("  " + "  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)).rstrip())
-    start, end = (
-        record.get("load_at_start"),
-        _get(record, "goals_issue_23_measured", "load_at_goals"),
-    )
+    lines = ["Issue 23's goals, each measured in this run (met  goal: measured; target):"]
+    for r in goal_rows:
+        met = "n/a" if r["met"] is None else ("yes" if r["met"] else "no")
+        if r.get("met_cpu") and not r["met"]:
+            met = "CPU"  # met in CPU time, not in wall time on the shared machine
+        lines.append(f"  {met:4s} {r['goal']}: {r['measured']}; {r['target']}")
+    start = record.get("load_at_start")
+    end = _get(record, "goals_issue_23_measured", "load_at_goals")
     lines.append(
-        f"  machine load (1/5/15 min): {start} at the start, {end} at the end; "
-        f"{record['machine'].get('cpu_count')} CPUs"
+        f"  (CPU: met in CPU time, not in wall time.) Machine load (1/5/15 min): {start} at the "
+        f"start, {end} at the end, on {record['machine'].get('cpu_count')} CPUs"
     )
     return "\n".join(lines)
