@@ -8,6 +8,7 @@ from typing import Any
 from . import branches as _bench_branches
 from . import curves as _bench_curves
 from . import first_call as _bench_first_call
+from . import goals as _bench_goals
 from . import optimize as _bench_optimize
 from . import simulate as _bench_simulate
 from . import speed as _bench_speed
@@ -193,5 +194,6 @@ def format_table(record: dict[str, Any]) -> str:
         simulate = record["simulate"]
         lines += ["", str(simulate) if "skipped" in simulate else _bench_simulate.table(simulate)]
     lines += ["", _bench_speed.table(record)]
+    lines += ["", _bench_goals.table(record)]
     lines.append(f"Total benchmark time: {record['elapsed_s']:.0f} s.")
     return "\n".join(lines)

@@ -9,10 +9,9 @@ systems — multiple shooting with CasADi, Floquet multipliers, return maps, sim
 
 from __future__ import annotations
 
-# The function `continuation` shares its name with its module: imported eagerly, since a lazy
-# name would be shadowed by the submodule once anything imports it.
-from .basin import Basin, basin, basin_fraction, basin_slice
-from .continuation import Branch, PseudoArclength, SpecialPoint, continuation
+import sys as _sys
+import types as _types
+
 from .errors import (
     FrozenModelError,
     GaitoptInputError,
@@ -21,12 +20,6 @@ from .errors import (
     StateError,
     UnknownModelError,
 )
-from .hybrid import Constraint, HybridModel, Phase, Section, Transition
-from .models import REGISTRY, model, register, unregister
-from .result import Gait, LimitCycle, OrbitArc
-from .search import find_limit_cycle
-from .shooting import MultipleShooting, ShootingProblem
-from .simulation import Simulation, simulate
 
 __all__ = [
     "model",
@@ -69,19 +62,64 @@ __all__ = [
     "GuessError",
     "FrozenModelError",
 ]
-#: Names imported on first use (PEP 562): the two-parameter curves, the orbit
-#: distance and optimal gaits pull in SciPy's integrators and optimisers, which most calls of
-#: ``import gaitopt`` never need.
+#: The public names, each imported from its module on first use (PEP 562): ``import gaitopt``
+#: costs the errors module only, and ``gaitopt.find_limit_cycle(gaitopt.model("compass_gait"))``
+#: imports the shooting, the one model and the verification's simulation, not the basins,
+#: continuation, curves or optimal gaits (SciPy's integrators and optimisers, matplotlib, Dask):
+#: tests/test_import_cost.py checks which modules that call imports.
 _LAZY = {
+    "model": ".models",
+    "register": ".models",
+    "unregister": ".models",
+    "REGISTRY": ".models",
+    "find_limit_cycle": ".search",
+    "continuation": ".continuation",
+    "PseudoArclength": ".continuation",
+    "Branch": ".continuation",
+    "SpecialPoint": ".continuation",
     "bifurcation_curve": ".curves",
     "Curve": ".curves",
     "ParameterPath": ".curves",
+    "MultipleShooting": ".shooting",
+    "ShootingProblem": ".shooting",
+    "Gait": ".result",
+    "LimitCycle": ".result",
+    "OrbitArc": ".result",
+    "simulate": ".simulation",
+    "Simulation": ".simulation",
+    "basin": ".basin",
+    "basin_slice": ".basin",
+    "basin_fraction": ".basin",
+    "Basin": ".basin",
+    "orbital_distance": ".orbits",
     "optimize_gait": ".optimize",
     "OptimalGait": ".optimize",
     "gait_library": ".optimize",
     "stabilise": ".optimize",
-    "orbital_distance": ".orbits",
+    "HybridModel": ".hybrid",
+    "Phase": ".hybrid",
+    "Section": ".hybrid",
+    "Transition": ".hybrid",
+    "Constraint": ".hybrid",
 }
+#: Public functions named as the subpackage that defines them (``gaitopt.continuation`` the
+#: function, ``gaitopt/continuation/`` its package; ``gaitopt.basin`` likewise): importing the
+#: subpackage would set the package's attribute to the module (the import system's
+#: ``setattr(parent, child, module)``), so :class:`_Package` keeps the function there instead —
+#: as when the names were imported eagerly, after their modules.
+_SHADOWED = frozenset({"continuation", "basin"})
+
+
+class _Package(_types.ModuleType):
+    """The package's module type: a submodule import does not replace a function of its name."""
+
+    def __setattr__(self, name: str, value: object) -> None:
+        if name in _SHADOWED and isinstance(value, _types.ModuleType):
+            value = getattr(value, name, value)
+        super().__setattr__(name, value)
+
+
+_sys.modules[__name__].__class__ = _Package
 
 
 def __getattr__(name: str):

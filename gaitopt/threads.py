@@ -41,11 +41,34 @@ def blas_threads() -> int:
     return max(value, 0)
 
 
+def _load_scipy_blas() -> None:
+    """Load SciPy's bundled BLAS library (a wheel's ``scipy.libs/*openblas*.so``) without
+    importing :mod:`scipy.linalg` (0.2–0.5 s that a gait's solve may never need): the dynamic
+    loader gives SciPy's extension modules this same library when they are imported later, so
+    the limit set on it holds for them.  Where SciPy has no such bundled library (a system
+    SciPy linked to the system's BLAS), :mod:`scipy.linalg` is imported instead."""
+    import ctypes
+    import importlib.util
+    from pathlib import Path
+
+    import numpy  # noqa: F401  (NumPy's BLAS, loaded by every caller anyway)
+
+    try:
+        spec = importlib.util.find_spec("scipy")
+        libs = sorted((Path(spec.origin).parent.parent / "scipy.libs").glob("*openblas*.so*"))
+        for lib in libs:
+            ctypes.CDLL(str(lib))
+    except (AttributeError, TypeError, OSError):
+        libs = []
+    if not libs:
+        import scipy.linalg  # noqa: F401
+
+
 def _limits(threads: int):
     """The threadpoolctl context limiting every loaded BLAS to ``threads`` threads."""
     global _controller
     if _controller is None:
-        import scipy.linalg  # noqa: F401  (SciPy's own BLAS: loaded, so that it is limited too)
+        _load_scipy_blas()  # SciPy's own BLAS: loaded, so that it is limited too
         from threadpoolctl import ThreadpoolController
 
         _controller = ThreadpoolController()

@@ -43,7 +43,6 @@ import warnings
 from collections.abc import Sequence
 
 from ..errors import GaitoptInputError
-from . import basin, continue_, control, linkage, list_, optimize, simulate, solve, stabilise
 from .common import (
     EXIT_BAD_INPUT,
     EXIT_INTERRUPTED,
@@ -75,38 +74,101 @@ __all__ = [
     "write_outputs",
 ]
 
+
 # -- the command ---------------------------------------------------------------------------------
+def _lazy(help: str, module: str, add_arguments: str, run: str) -> Subcommand:
+    """A subcommand whose module (``gaitopt.cli.<module>``) is imported only when its arguments
+    are declared or it runs: ``gaitopt solve`` imports the solver, not the basins, continuation,
+    optimal gaits or plotting of the other subcommands."""
+    from importlib import import_module
+
+    def declare(parser: argparse.ArgumentParser) -> None:
+        getattr(import_module(f".{module}", __name__), add_arguments)(parser)
+
+    def execute(args: argparse.Namespace) -> int:
+        return getattr(import_module(f".{module}", __name__), run)(args)
+
+    declare.__qualname__ = f"{module}.{add_arguments}"
+    execute.__qualname__ = f"{module}.{run}"
+    return Subcommand(help, declare, execute)
+
+
+#: Each subcommand: its one-line help (as its module's ``HELP`` where it has one:
+#: tests/test_cli_lazy.py checks they agree) and its module's two functions.
 SUBCOMMANDS: dict[str, Subcommand] = {
-    "list": Subcommand(
-        "list the models and their parameters", list_._list_arguments, list_.run_list
-    ),
-    "solve": Subcommand(
-        "find a gait (periodic orbit) by multiple shooting", solve._solve_arguments, solve.run_solve
-    ),
-    "simulate": Subcommand(
+    "list": _lazy("list the models and their parameters", "list_", "_list_arguments", "run_list"),
+    "solve": _lazy(
+        "find a gait (periodic orbit) by multiple shooting",
+        "solve",
+        "_solve_arguments",
+        "run_solve",
+    ),  # fmt: skip
+    "simulate": _lazy(
         "simulate a model and print its returns to the section",
-        simulate._simulate_arguments,
-        simulate.run_simulate,
+        "simulate",
+        "_simulate_arguments",
+        "run_simulate",
     ),
-    "control": Subcommand(
+    "control": _lazy(
         "design a step-to-step controller (LQR, pole placement, deadbeat) around a gait",
-        control._control_arguments,
-        control.run_control,
+        "control",
+        "_control_arguments",
+        "run_control",
     ),
-    "continue": Subcommand(
+    "continue": _lazy(
         "follow a gait through a parameter: special points, period-doubling cascades",
-        continue_._continue_arguments,
-        continue_.run_continue,
+        "continue_",
+        "_continue_arguments",
+        "run_continue",
     ),
-    "linkage": Subcommand(linkage.HELP, linkage.add_arguments, linkage.run),
-    "optimize": Subcommand(optimize.HELP, optimize.add_arguments, optimize.run),
-    "basin": Subcommand(basin.HELP, basin.add_arguments, basin.run),
-    "stabilise": Subcommand(stabilise.HELP, stabilise.add_arguments, stabilise.run),
+    "linkage": _lazy(
+        "kinematics of a leg linkage (Jansen's Strandbeest): foot path, ground contact, "
+        "ride height",
+        "linkage",
+        "add_arguments",
+        "run",
+    ),
+    "optimize": _lazy(
+        "synthesise an optimal gait (least effort, work or cost of transport) with input profiles",
+        "optimize",
+        "add_arguments",
+        "run",
+    ),
+    "basin": _lazy(
+        "a gait's basin of attraction: radii along rays and a sampled fraction, all simulated",
+        "basin",
+        "add_arguments",
+        "run",
+    ),
+    "stabilise": _lazy(
+        "stabilise a gait's orbit by transverse LQR (continuous feedback along the orbit)",
+        "stabilise",
+        "add_arguments",
+        "run",
+    ),
 }
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``gaitopt`` argument parser, one subparser per entry of :data:`SUBCOMMANDS`."""
+def __getattr__(name: str):
+    """``gaitopt.cli.solve`` and the other subcommands' modules, imported on first use (PEP 562)."""
+    modules = {"list_", "solve", "simulate", "control", "continue_", "linkage", "optimize",
+               "basin", "stabilise"}  # fmt: skip
+    if name in modules:
+        from importlib import import_module
+
+        return import_module(f".{name}", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``gaitopt`` argument parser, one subparser per entry of :data:`SUBCOMMANDS`.
+
+    Parameters
+    ----------
+    command : str, optional
+        Declare the arguments of this subcommand only (the others are listed with their help but
+        take no arguments), so that only its module is imported; default: every subcommand's.
+    """
     from .. import __version__
 
     parser = _Parser(
@@ -116,11 +178,20 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name, command in SUBCOMMANDS.items():
-        sub = commands.add_parser(name, help=command.help, description=command.help)
-        command.add_arguments(sub)
-        sub.set_defaults(run=command.run)
+    for name, sub_command in SUBCOMMANDS.items():
+        sub = commands.add_parser(name, help=sub_command.help, description=sub_command.help)
+        if command is None or name == command:
+            sub_command.add_arguments(sub)
+        sub.set_defaults(run=sub_command.run)
     return parser
+
+
+def _chosen(argv: Sequence[str]) -> str:
+    """The subcommand ``argv`` names (its first word not an option: ``gaitopt`` itself has only
+    ``--help`` and ``--version``), or ``""`` for none or an unknown one (then no subcommand's
+    arguments are declared: argparse's usage message or help needs none)."""
+    word = next((a for a in argv if not a.startswith("-")), None)
+    return word if word in SUBCOMMANDS else ""
 
 
 def _check_out(args: argparse.Namespace) -> None:
@@ -175,7 +246,8 @@ def _interrupted() -> None:
 
 def _run(argv: Sequence[str] | None) -> int:
     """:func:`main` without its handling of Ctrl-C."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_chosen(argv))
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # usage errors (2) and --help (0) exit from inside argparse

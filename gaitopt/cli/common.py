@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
 
@@ -17,8 +17,10 @@ from ..errors import (
     StateError,
     did_you_mean,
 )
-from ..hybrid import HybridModel
 from ..parameters import ParameterSpec, check_parameter
+
+if TYPE_CHECKING:  # annotations only: `gaitopt list` and `--help` need no CasADi
+    from ..hybrid import HybridModel
 
 PROG = "gaitopt"
 EXIT_OK = 0

@@ -2,33 +2,12 @@
 
 from __future__ import annotations
 
+from collections.abc import MutableMapping
 from types import ModuleType
 from typing import TYPE_CHECKING
 
 from ..errors import ParameterError, UnknownModelError, did_you_mean
 from ..hybrid import HybridModel
-from .ballistic_walker import BallisticWalker
-from .biped_runner import BipedRunner
-from .bouncing_ball import BouncingBall
-from .compass_gait import CompassGait
-from .five_link_biped import FiveLinkBiped
-from .kneed_walker import KneedWalker
-from .line_juggler import LineJuggler
-from .minimal_biped import MinimalBipedRun, MinimalBipedWalk
-from .one_d_hopper import OneDHopper
-from .planar_juggler import PlanarJuggler
-from .planar_quadruped import PlanarQuadruped, PlanarQuadrupedPronk
-from .planar_quadruped_raibert import PlanarQuadrupedRaibert
-from .planar_quadruped_raibert_pronk import PlanarQuadrupedRaibertPronk
-from .raibert_hopper import RaibertHopper
-from .rimless_wheel import RimlessWheel
-from .simplest_walker import SimplestWalker
-from .slip import Slip
-from .slip_actuated import SlipActuated
-from .strandbeest import Strandbeest
-from .three_link_walker import ThreeLinkWalker
-from .vanderpol import VanDerPol
-from .vertical_hopper import VerticalHopper
 
 if TYPE_CHECKING:
     from importlib.metadata import EntryPoint
@@ -69,35 +48,115 @@ __all__ = [
     "VerticalHopper",
 ]
 
-REGISTRY: dict[str, type[HybridModel]] = {
-    cls.name: cls
-    for cls in (
-        VanDerPol,
-        RimlessWheel,
-        CompassGait,
-        SimplestWalker,
-        KneedWalker,
-        FiveLinkBiped,
-        Slip,
-        SlipActuated,
-        VerticalHopper,
-        OneDHopper,
-        RaibertHopper,
-        BouncingBall,
-        LineJuggler,
-        PlanarJuggler,
-        BallisticWalker,
-        Strandbeest,
-        ThreeLinkWalker,
-        PlanarQuadruped,
-        PlanarQuadrupedPronk,
-        PlanarQuadrupedRaibert,
-        PlanarQuadrupedRaibertPronk,
-        BipedRunner,
-        MinimalBipedWalk,
-        MinimalBipedRun,
-    )
+#: The built-in models: name -> (module of this package, class), in the order ``gaitopt list``
+#: shows them.  A class's module is imported when the class is first asked for
+#: (``REGISTRY[name]``, ``gaitopt.model(name)``, ``gaitopt.models.CompassGait``), so ``import
+#: gaitopt`` and ``gaitopt solve compass_gait`` import one model file, not all of them
+#: (tests/test_import_cost.py checks this table against each class's ``name``).
+BUILTIN: dict[str, tuple[str, str]] = {
+    "vanderpol": ("vanderpol", "VanDerPol"),
+    "rimless_wheel": ("rimless_wheel", "RimlessWheel"),
+    "compass_gait": ("compass_gait", "CompassGait"),
+    "simplest_walker": ("simplest_walker", "SimplestWalker"),
+    "kneed_walker": ("kneed_walker", "KneedWalker"),
+    "five_link_biped": ("five_link_biped", "FiveLinkBiped"),
+    "slip": ("slip", "Slip"),
+    "slip_actuated": ("slip_actuated", "SlipActuated"),
+    "vertical_hopper": ("vertical_hopper", "VerticalHopper"),
+    "one_d_hopper": ("one_d_hopper", "OneDHopper"),
+    "raibert_hopper": ("raibert_hopper", "RaibertHopper"),
+    "bouncing_ball": ("bouncing_ball", "BouncingBall"),
+    "line_juggler": ("line_juggler", "LineJuggler"),
+    "planar_juggler": ("planar_juggler", "PlanarJuggler"),
+    "ballistic_walker": ("ballistic_walker", "BallisticWalker"),
+    "strandbeest": ("strandbeest", "Strandbeest"),
+    "three_link_walker": ("three_link_walker", "ThreeLinkWalker"),
+    "planar_quadruped": ("planar_quadruped", "PlanarQuadruped"),
+    "planar_quadruped_pronk": ("planar_quadruped", "PlanarQuadrupedPronk"),
+    "planar_quadruped_raibert": ("planar_quadruped_raibert", "PlanarQuadrupedRaibert"),
+    "planar_quadruped_raibert_pronk": (
+        "planar_quadruped_raibert_pronk",
+        "PlanarQuadrupedRaibertPronk",
+    ),
+    "biped_runner": ("biped_runner", "BipedRunner"),
+    "minimal_biped_walk": ("minimal_biped", "MinimalBipedWalk"),
+    "minimal_biped_run": ("minimal_biped", "MinimalBipedRun"),
 }
+_CLASSES = {cls: module for module, cls in BUILTIN.values()}
+_MODULES = frozenset(_CLASSES.values())
+
+
+def _load_builtin(name: str) -> type[HybridModel]:
+    """Import the built-in model ``name``'s module and return its class."""
+    from importlib import import_module
+
+    module, cls_name = BUILTIN[name]
+    cls = getattr(import_module(f".{module}", __name__), cls_name)
+    if cls.name != name:  # the table above and the class disagree: a bug here, said plainly
+        raise RuntimeError(f"gaitopt.models.BUILTIN[{name!r}] names {cls_name}, named {cls.name!r}")
+    return cls
+
+
+class _Registry(MutableMapping):
+    """The registry: model name -> model class, a built-in class imported on first access.
+
+    A mapping like a dict (``REGISTRY[name]``, ``in``, ``list``, ``items``, ``values``); the
+    order is that of registration (the built-in models first, in :data:`BUILTIN`'s order).
+    Iterating over the names imports nothing; reading a value imports that model's module.
+    """
+
+    def __init__(self) -> None:
+        self._items: dict[str, type[HybridModel] | None] = dict.fromkeys(BUILTIN)
+
+    def __getitem__(self, name: str) -> type[HybridModel]:
+        cls = self._items[name]
+        if cls is None:
+            cls = self._items[name] = _load_builtin(name)
+        return cls
+
+    def __setitem__(self, name: str, cls: type[HybridModel]) -> None:
+        self._items[name] = cls
+
+    def __delitem__(self, name: str) -> None:
+        del self._items[name]
+
+    def __iter__(self):
+        return iter(self._items)
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._items
+
+    def loaded(self, name: str) -> bool:
+        """Whether ``name``'s class is imported already (a registered class always is)."""
+        return self._items.get(name) is not None
+
+    def __repr__(self) -> str:
+        return f"REGISTRY({', '.join(self._items)})"
+
+
+REGISTRY: MutableMapping[str, type[HybridModel]] = _Registry()
+
+
+def __getattr__(name: str) -> type[HybridModel]:
+    """``gaitopt.models.CompassGait``: a built-in model class (or ``.compass_gait``, its module),
+    the module imported on first use (PEP 562)."""
+    from importlib import import_module
+
+    if name in _MODULES:  # a model's module (``gaitopt.models.compass_gait``), as if imported
+        return import_module(f".{name}", __name__)
+    module = _CLASSES.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_CLASSES))
 
 
 #: The entry-point group through which installed packages declare their models.

@@ -45,8 +45,6 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-import scipy.sparse
-import scipy.sparse.linalg
 
 from ..orbit.sensitivity import end_jacobians, saltation
 from .radau import _derivative_matrix
@@ -240,6 +238,9 @@ def fill_sensitivities(col: Any, w: np.ndarray, p: np.ndarray) -> np.ndarray:
     w[index] = 0.0
     g = np.asarray(G(w, p), dtype=float).ravel()
     Jz = J(w, p).sparse()[:, index]
+    import scipy.sparse  # here: a problem without a spectral bound never needs SciPy's sparse
+    import scipy.sparse.linalg
+
     try:
         z = scipy.sparse.linalg.spsolve(scipy.sparse.csc_matrix(Jz), -g)
     except (RuntimeError, ValueError):

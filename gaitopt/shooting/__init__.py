@@ -16,11 +16,12 @@ The problem and the methods are separate modules:
   unknowns), below the homotopy and multi-start of :mod:`gaitopt.homotopy`.
 
 :func:`find_limit_cycle`, which chooses among them, and :func:`solve_task`, its sweep task, live
-above this package in :mod:`gaitopt.search`; they are re-exported here for the older import path
-(nothing in this package imports them, so no circle).
+above this package in :mod:`gaitopt.search`; they are re-exported here for the older import path,
+imported on first use (PEP 562): :mod:`gaitopt.search` imports :mod:`gaitopt.shooting.gait`, so an
+eager import here would make ``import gaitopt.search`` in a fresh process find this package
+half-initialised.
 """
 
-from ..search import find_limit_cycle, solve_task
 from .certify import certify, check_constraints
 from .gait import solve_gait
 from .newton import METHODS, Solution
@@ -42,3 +43,13 @@ __all__ = [
     "solve_task",
     "verify_by_simulation",
 ]
+
+
+def __getattr__(name: str):
+    if name in ("find_limit_cycle", "solve_task"):
+        from .. import search
+
+        value = getattr(search, name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

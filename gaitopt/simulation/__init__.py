@@ -153,7 +153,7 @@ def simulate(
                         f"{len(model.phases)} phase(s), numbered from 0")  # fmt: skip
     rtol, atol = check_positive("rtol", rtol, "1e-11"), check_positive("atol", atol, "1e-12")
     library = _arc_library(model, backend, method, feedforward, feedback)
-    if library is not None:  # each arc one compiled call (imports scipy.integrate, as below)
+    if library is not None:  # each arc one compiled call (no scipy.integrate: compiled.py)
         from .compiled import arc_plan, integrate_arc, rests_on_guard, violated_at_start
     max_phase_time = check_positive("max_phase_time", max_phase_time, "30")
     x = _initial_state(model, x0, phase)
@@ -176,9 +176,11 @@ def simulate(
         step_parameters.append(changes)
         return model.replace(**changes).p
 
-    import scipy.integrate
+    solver_cls = None
+    if library is None:  # SciPy's stepper (scipy.integrate: 0.3–0.5 s, imported when needed)
+        import scipy.integrate
 
-    solver_cls = getattr(scipy.integrate, method)
+        solver_cls = getattr(scipy.integrate, method)
 
     sim = Simulation(False, "completed", "")
     sec_t: list[float] = []

@@ -5,19 +5,20 @@ The same integration as :func:`gaitopt.simulation.phase.integrate_phase` with Sc
 dense output, the strict directional event checks at each step's check points, the root on the
 dense output and the admissibility of a crossing all run inside ``gaitopt_arc``
 (:mod:`gaitopt.kernels.arc_driver`), one ``ctypes`` call per arc instead of some 300 µs of
-Python per step.  Python builds the arc's :class:`scipy.integrate.OdeSolution` from the steps'
-dense-output coefficients afterwards (SciPy's own ``Dop853DenseOutput``), so an arc is the
-same object either way.  Only for a constant input over the phase (no feedforward or feedback:
-those stay in the Python loop).  Imported on a simulation's first compiled arc (it imports
-``scipy.integrate``, 0.4 s, as the Python loop does on first use).
+Python per step.  Python builds the arc's dense solution from the steps' dense-output
+coefficients afterwards (SciPy's ``OdeSolution`` and ``Dop853DenseOutput`` as
+:mod:`gaitopt.simulation.dense` restates them, so that a solve need not import
+``scipy.integrate``, 0.3–0.5 s: the same values to the bit), so an arc evaluates the same either
+way.  Only for a constant input over the phase (no feedforward or feedback: those stay in the
+Python loop).  Imported on a simulation's first compiled arc.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate import OdeSolution
 
 from ..kernels.arcs import ArcLibrary, address
+from .dense import Dop853Piece, PiecewiseSolution
 from .phase import _ARM, _CONSTRAINT_RATE, _CONSTRAINT_START, PhaseFunctions, _held
 
 __all__ = [
@@ -149,10 +150,11 @@ def integrate_arc(
         return arc, None, None, "timeout" if code == 1 else "failed"
 
 
-class DenseArc(OdeSolution):
-    """An arc's :class:`scipy.integrate.OdeSolution` from the compiled steps' dense-output
-    coefficients: its pieces (SciPy's ``Dop853DenseOutput``, one per step) are built when first
-    evaluated, not per step as the arc is integrated.
+class DenseArc(PiecewiseSolution):
+    """An arc's dense solution (as :class:`scipy.integrate.OdeSolution`) from the compiled steps'
+    dense-output coefficients: its pieces (:class:`~gaitopt.simulation.dense.Dop853Piece`, SciPy's
+    ``Dop853DenseOutput``, one per step) are built when first evaluated, not per step as the arc
+    is integrated.
 
     Parameters
     ----------
@@ -169,23 +171,20 @@ class DenseArc(OdeSolution):
     def __init__(self, ts: np.ndarray, ends: np.ndarray, y_old: np.ndarray, F: np.ndarray):
         # OdeSolution's attributes for increasing, strictly ordered time stamps (the driver's
         # crossings lie strictly after a step's start: locate_crossing)
-        self.ts = self.ts_sorted = ts
+        self.ts = ts
         self.n_segments = ends.size
         self.t_min, self.t_max = ts[0], ts[-1]
-        self.ascending, self.side = True, "left"
         self._steps = (ends, y_old, F)
         self._interpolants = None
 
     @property
     def interpolants(self) -> list:
-        """The steps' ``Dop853DenseOutput`` pieces (built on first use)."""
+        """The steps' DOP853 interpolants (built on first use)."""
         if self._interpolants is None:
-            from scipy.integrate._ivp.rk import Dop853DenseOutput
-
             ends, y_old, F = self._steps
             starts = self.ts[:-1].tolist()
             self._interpolants = [
-                Dop853DenseOutput(t_old, t_new, y, f)
+                Dop853Piece(t_old, t_new, y, f)
                 for t_old, t_new, y, f in zip(starts, ends.tolist(), y_old, F, strict=True)
             ]
         return self._interpolants
