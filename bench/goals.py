@@ -354,8 +354,8 @@ def rows(record: dict[str, Any]) -> list[dict[str, Any]]:
                 f"{so['ratio']:.2f}× "
                 f"({1e3 * so['overhead_per_point_s']:+.2g} ms per point; "
                 f"{so['points']} points of {so['steps_per_point']} steps)",
-                "≤ 1.1× (no more than 10 % over bare Dask)",
-                so["ratio"] <= 1.1,
+                "≤ 1.2× (issue 23: sweep overhead at most 1.2× bare Dask per point)",
+                so["ratio"] <= 1.2,
                 "goals_issue_23_measured.sweep_overhead",
             )
         )
@@ -364,7 +364,7 @@ def rows(record: dict[str, Any]) -> list[dict[str, Any]]:
             _row(
                 "sweep vs bare Dask (client.map), per point",
                 str(so.get("skipped", "—")),
-                "≤ 1.1×",
+                "≤ 1.2×",
                 None,
                 "goals_issue_23_measured.sweep_overhead",
             )
@@ -380,7 +380,7 @@ def rows(record: dict[str, Any]) -> list[dict[str, Any]]:
             _row(
                 "compiled simulation vs the Python loop (CPU, median over models)",
                 f"{med:.3g}× (range {speedups[0]:.3g}–{speedups[-1]:.3g}×, {len(speedups)} models)",
-                "≥ 10×",
+                "≥ 10× (this bench's own mark; issue 23 sets no number for it)",
                 med >= 10,
                 "simulate",
             )
