@@ -9,6 +9,7 @@ first segment start of the chain is ``lift(s, p)``, contributing ``∂lift/∂s`
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 
 import casadi as ca
@@ -70,9 +71,41 @@ class Assembly:
             outs += list(phase[i](X, u, p, w[off_T] / S))
         self.shapes = [o.shape for o in outs]
         self.chain_function = ca.Function("chain", [w, u, p], [ca.vertcat(*map(ca.vec, outs))])
+        self._buffers = threading.local()
+
+    def __getstate__(self) -> dict:
+        return {k: v for k, v in self.__dict__.items() if k != "_buffers"}  # per thread
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state, _buffers=threading.local())
+
+    def _call(self, w, u, p) -> np.ndarray:
+        """The chain function's (dense, column-major) output, through a per-thread CasADi
+        buffer (``Function.buffer``: no DM built per call) where the arguments fit it."""
+        buffers = self._buffers.__dict__
+        if "call" not in buffers:
+            f = self.chain_function
+            args = [np.zeros(f.nnz_in(i)) for i in range(3)]
+            res = np.zeros(f.nnz_out(0))
+            buf, call = f.buffer()
+            for i, a in enumerate(args):
+                buf.set_arg(i, memoryview(a))
+            buf.set_res(0, memoryview(res))
+            nz = np.array(f.sparsity_out(0).find(), dtype=np.intp)
+            buffers.update(call=call, buf=buf, args=args, res=res, nz=nz)
+        args = buffers["args"]
+        values = [np.asarray(v, dtype=float).ravel() for v in (w, u, p)]
+        if any(v.size != a.size or a.size == 0 for v, a in zip(values, args, strict=True)):
+            return np.asarray(self.chain_function(w, u, p), dtype=float).ravel(order="F")
+        for a, v in zip(args, values, strict=True):
+            a[:] = v
+        buffers["call"]()
+        flat = np.zeros(self.chain_function.numel_out(0))
+        flat[buffers["nz"]] = buffers["res"]
+        return flat
 
     def _outputs(self, w, u, p) -> list[np.ndarray]:
-        flat = np.asarray(self.chain_function(w, u, p), dtype=float).ravel()
+        flat = self._call(w, u, p)
         out, at = [], 0
         for rows, cols in self.shapes:
             out.append(flat[at : at + rows * cols].reshape(rows, cols, order="F"))
