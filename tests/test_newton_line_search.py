@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import gaitopt
+from gaitopt.continuation.switching import doubled_unknowns
 from gaitopt.orbit.newton import newton
 
 
@@ -61,14 +62,25 @@ def test_residual_trials_give_the_same_iterates(name):
     assert fast["jacobian"] <= it_b + 1 < plain["jacobian"]
 
 
-def test_shooting_residual_alone_is_the_residual_with_jacobian():
-    # Source: the assembled shooting system evaluated with and without its Jacobian at a
-    # perturbed orbit: F must be bitwise the same (tolerance 0), so that Newton's accept/reject
-    # decisions do not depend on which evaluation computed it.
-    m = gaitopt.model("compass_gait", slope=0.0525)
+@pytest.mark.parametrize(("name", "steps"), [("compass_gait", 1), ("compass_gait", 2), ("slip", 1)])
+def test_shooting_residual_alone_is_the_residual_with_jacobian(name, steps):
+    # Source: the assembled shooting system evaluated with its Jacobian (the RK steps carrying
+    # their derivatives) and without (kernels.step_kernels: the steps alone) at a perturbed
+    # orbit: every output must be bitwise the same (tolerance 0), so that Newton's accept/reject
+    # decisions do not depend on which evaluation computed them (SLIP: two phases per step; two
+    # steps: the period-1 orbit repeated, as the branch switching at a period doubling has it).
+    m = gaitopt.model(name)
     cycle = gaitopt.find_limit_cycle(m)
-    asm = cycle.problem.assembly()
-    w = cycle.solution + 1e-3 * np.cos(np.arange(cycle.solution.size))
+    assert cycle.success
+    problem, w, _ = doubled_unknowns(cycle) if steps == 2 else (cycle.problem, cycle.solution, 0)
+    asm = problem.assembly()
+    w = w + 1e-3 * np.cos(np.arange(w.size))
     full = asm(w, cycle.inputs, m.p)
     alone = asm(w, cycle.inputs, m.p, jacobian=False)
-    assert np.array_equal(full.F, alone.F) and alone.F_w is None
+    assert alone.F_w is None and asm._residual_chain() is not None  # the steps' own chain
+    for a, b in zip(
+        (full.F, full.x_return, full.rates, full.admissible, full.durations, *full.ends),
+        (alone.F, alone.x_return, alone.rates, alone.admissible, alone.durations, *alone.ends),
+        strict=True,
+    ):
+        assert np.array_equal(a, b)
