@@ -25,9 +25,17 @@ from functools import lru_cache
 import casadi as ca
 
 from .cache import cache_dir, load, source_key
-from .symbolic import kernel_functions
+from .symbolic import kernel_functions, step_functions
 
-__all__ = ["ModelKernels", "model_kernels", "phase_function", "trajectory_function", "cache_dir"]
+__all__ = [
+    "ModelKernels",
+    "model_kernels",
+    "phase_function",
+    "phase_residual_function",
+    "step_kernels",
+    "trajectory_function",
+    "cache_dir",
+]
 
 
 class ModelKernels:
@@ -79,6 +87,41 @@ def phase_function(model_cls, phase: int, segments: int, steps: int) -> ca.Funct
     X = ca.MX.sym("X", n, segments)
     X_end, Ds = segment(X, u, p, hs)
     return ca.Function(f"phase_{phase}", [X, u, p, hs], [X_end, Ds, *end(X_end[:, -1], u, p)])
+
+
+@lru_cache(maxsize=64)
+def step_kernels(model_cls) -> list[ca.Function] | None:
+    """Per phase ``step_i(x, u, p, hs, N) -> x⁺``: ``fold_i``'s RK step without its derivatives
+    (:func:`gaitopt.kernels.symbolic.step_functions`), in a library of their own compiled on the
+    first residual-only evaluation; None where they cannot be built."""
+    name = f"gaitopt_{model_cls.__name__.lower()}_step"
+    try:
+        return load(
+            name, lambda: step_functions(model_cls), verbose=False,
+            key=source_key(name, model_cls),
+        )[0]  # fmt: skip
+    except (RuntimeError, TypeError, NotImplementedError):
+        return None
+
+
+@lru_cache(maxsize=256)
+def phase_residual_function(model_cls, phase: int, segments: int, steps: int) -> ca.Function | None:
+    """``phase(X, u, p, hs) -> (X_end, g, g_x, g_u, g_p, r, r_x, r_u, r_p, ġ, admissible)``:
+    :func:`phase_function` without the segments' derivatives ``D`` (the same numbers, the RK
+    steps by :func:`step_kernels`), for the residual alone; None without step kernels."""
+    kern, steppers = model_kernels(model_cls), step_kernels(model_cls)
+    if kern is None or steppers is None:
+        return None
+    n, nu, np_ = kern.n[phase], kern.n_u, kern.n_p
+    step, end = steppers[phase], kern.end[phase]
+    x0, u, p, hs = ca.MX.sym("x0", n), ca.MX.sym("u", nu), ca.MX.sym("p", np_), ca.MX.sym("hs")
+    x = x0
+    for _ in range(steps):
+        x = step(x, u, p, hs, steps)
+    segment = ca.Function("segment", [x0, u, p, hs], [x]).map(segments)
+    X = ca.MX.sym("X", n, segments)
+    X_end = segment(X, u, p, hs)
+    return ca.Function(f"residual_{phase}", [X, u, p, hs], [X_end, *end(X_end[:, -1], u, p)])
 
 
 @lru_cache(maxsize=256)

@@ -1,7 +1,7 @@
 """``python -m gaitopt.kernels --warm [--jobs N] [MODEL ...]``: compile (or find in the cache) the
-shooting kernels, the verification's DOP853 steps, the compiled simulation's arc libraries, the
-batch simulation's functions and, for a model with inputs, the optimiser's node kernels and flow
-Jacobians
+shooting kernels (and their RK steps without derivatives), the verification's DOP853 steps, the
+compiled simulation's arc libraries, the batch simulation's functions and, for a model with
+inputs, the optimiser's node kernels and flow Jacobians
 (:func:`gaitopt.optimize.collocation.warm_kernels`) of the built-in models, so that no later call
 waits for the compiler.  ``--jobs`` compiles that many models at once (default: the number of
 CPUs); the cache is safe for concurrent compiles."""
@@ -27,11 +27,13 @@ def _warm(name: str) -> tuple[str, str, float, float]:
     """Compile (or load) one registered model's kernels; ``(name, how, seconds, CPU
     seconds)``."""
     from ..models import REGISTRY
-    from . import model_kernels
+    from . import model_kernels, step_kernels
     from .verify import verification_steps
 
     start, cpu = time.perf_counter(), _cpu()
     kern = model_kernels(REGISTRY[name])
+    if kern is not None:
+        step_kernels(REGISTRY[name])  # the RK steps without derivatives (residual alone)
     verification_steps(REGISTRY[name])  # the verification's DOP853 steps
     from .arcs import arc_library
 

@@ -9,12 +9,13 @@ first segment start of the chain is ``lift(s, p)``, contributing ``∂lift/∂s`
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
-from . import model_kernels, phase_function
+from . import model_kernels, phase_function, phase_residual_function
 
 __all__ = ["Evaluation", "Assembly"]
 
@@ -55,9 +56,19 @@ class Assembly:
         self.offsets = [
             (problem.layout[2 * k][2], problem.layout[2 * k + 1][2]) for k in range(len(self.chain))
         ]
+        self._model_cls, self._N = problem.model_cls, N
         # One call evaluates the whole chain (one flat output: a call from Python costs more
         # than the kernels of a small model).
-        m = self.m
+        self.chain_function, self.shapes = self._chain(phase)
+        # The residual alone (``jacobian=False``), built on first use: the RK steps without
+        # their derivatives, the segments' ``D`` left out of the output.
+        self._residual: tuple[ca.Function, list] | None = None
+        self._buffers = threading.local()
+
+    def _chain(self, phase: dict) -> tuple[ca.Function, list]:
+        """The chain's function of ``phase`` (per phase index, a :func:`phase_function` or
+        :func:`phase_residual_function`) and its outputs' shapes."""
+        S, m = self.S, self.m
         w = ca.MX.sym("w", self.size)
         u, p = ca.MX.sym("u", self.n_u), ca.MX.sym("p", self.n_p)
         outs = list(self.lift(w[:m], p))
@@ -68,15 +79,61 @@ class Assembly:
             else:
                 X = ca.reshape(w[off : off + n * S], n, S)
             outs += list(phase[i](X, u, p, w[off_T] / S))
-        self.shapes = [o.shape for o in outs]
-        self.chain_function = ca.Function("chain", [w, u, p], [ca.vertcat(*map(ca.vec, outs))])
+        shapes = [o.shape for o in outs]
+        return ca.Function("chain", [w, u, p], [ca.vertcat(*map(ca.vec, outs))]), shapes
 
-    def _outputs(self, w, u, p) -> list[np.ndarray]:
-        flat = np.asarray(self.chain_function(w, u, p), dtype=float).ravel()
+    def _residual_chain(self) -> tuple[ca.Function, list] | None:
+        if self._residual is None:
+            phase = {
+                i: phase_residual_function(self._model_cls, i, self.S, self._N)
+                for i in set(self.chain)
+            }
+            self._residual = (None, []) if None in phase.values() else self._chain(phase)
+        return None if self._residual[0] is None else self._residual
+
+    def __getstate__(self) -> dict:
+        return {k: v for k, v in self.__dict__.items() if k != "_buffers"}  # per thread
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state, _buffers=threading.local())
+
+    def _call(self, f: ca.Function, w, u, p) -> np.ndarray:
+        """``f``'s (dense, column-major) output, through a per-thread CasADi buffer
+        (``Function.buffer``: no DM built per call) where the arguments fit it."""
+        buffers = self._buffers.__dict__
+        if id(f) not in buffers:  # f lives as long as self (its chain or residual chain)
+            args = [np.zeros(f.nnz_in(i)) for i in range(3)]
+            res = np.zeros(f.nnz_out(0))
+            buf, call = f.buffer()
+            for i, a in enumerate(args):
+                buf.set_arg(i, memoryview(a))
+            buf.set_res(0, memoryview(res))
+            nz = np.array(f.sparsity_out(0).find(), dtype=np.intp)
+            buffers[id(f)] = (call, buf, args, res, nz, f.numel_out(0))
+        call, _, args, res, nz, numel = buffers[id(f)]
+        values = [np.asarray(v, dtype=float).ravel() for v in (w, u, p)]
+        if any(v.size != a.size or a.size == 0 for v, a in zip(values, args, strict=True)):
+            return np.asarray(f(w, u, p), dtype=float).ravel(order="F")
+        for a, v in zip(args, values, strict=True):
+            a[:] = v
+        call()
+        flat = np.zeros(numel)
+        flat[nz] = res
+        return flat
+
+    def _outputs(self, w, u, p, jacobian: bool = True) -> list[np.ndarray | None]:
+        residual = None if jacobian else self._residual_chain()
+        f, shapes = residual or (self.chain_function, self.shapes)
+        flat = self._call(f, w, u, p)
         out, at = [], 0
-        for rows, cols in self.shapes:
-            out.append(flat[at : at + rows * cols].reshape(rows, cols, order="F"))
+        for j, (rows, cols) in enumerate(shapes):
+            # The residual alone reads the lift's x and each phase's X_end, g, r, ġ, admissible.
+            used = residual is None or j == 0 or (j >= 3 and (j - 3) % 11 in (0, 1, 5, 9, 10))
+            out.append(flat[at : at + rows * cols].reshape(rows, cols, order="F") if used else None)
             at += rows * cols
+        if residual is not None:  # no segment derivatives D: None in their place
+            for k in range(len(self.chain)):
+                out.insert(4 + 12 * k, None)
         return out
 
     def __call__(self, w, u, p, *, jacobian: bool = True) -> Evaluation:
@@ -93,7 +150,7 @@ class Assembly:
         J = np.zeros((size, size)) if jacobian else None
         Ju = np.zeros((size, nu)) if jacobian else None
         Jp = np.zeros((size, np_)) if jacobian else None
-        outputs = self._outputs(w, u, p)
+        outputs = self._outputs(w, u, p, jacobian)
         x_lift, L_s, L_p = outputs[:3]
         x_lift = x_lift.ravel()
         K = len(self.chain)

@@ -21,7 +21,7 @@ import casadi as ca
 
 from ..integrators import rk_step
 
-__all__ = ["kernel_functions"]
+__all__ = ["kernel_functions", "step_functions"]
 
 
 def _fold(flow: ca.Function, name: str) -> ca.Function:
@@ -40,6 +40,23 @@ def _fold(flow: ca.Function, name: str) -> ca.Function:
     D1 = A @ D + ca.horzcat(ca.SX.zeros(n, n), B)
     return ca.Function(name, [x, D, u, p, hs, N], [x1, D1], ["x", "D", "u", "p", "hs", "N"],
                        ["x1", "D1"])  # fmt: skip
+
+
+def _step(flow: ca.Function, name: str) -> ca.Function:
+    """``fold``'s step without its derivatives: ``x⁺`` by the same operations (so the same
+    numbers), for evaluating the residual alone."""
+    n, nu, np_ = flow.size1_in(0), flow.size1_in(1), flow.size1_in(2)
+    x, u, p = ca.SX.sym("x", n), ca.SX.sym("u", nu), ca.SX.sym("p", np_)
+    hs, N = ca.SX.sym("hs"), ca.SX.sym("N")
+    h = ca.SX.sym("h")
+    step = ca.Function("step", [x, u, p, h], [rk_step(flow, x, u, p, h)])
+    return ca.Function(name, [x, u, p, hs, N], [step(x, u, p, hs / N)], ["x", "u", "p", "hs", "N"],
+                       ["x1"])  # fmt: skip
+
+
+def step_functions(model_cls) -> list[ca.Function]:
+    """``[step_0, step_1, ...]`` of a model class (SX functions; see :func:`_step`)."""
+    return [_step(phase.flow, f"step_{i}") for i, phase in enumerate(model_cls.structure().phases)]
 
 
 def _end(phase, name: str) -> ca.Function:

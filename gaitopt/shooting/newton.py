@@ -110,6 +110,7 @@ def newton(problem: ShootingSystem, w0, u, p, *, line_search: bool = False):
         lambda w: asm(w, u, p), w0, line_search=line_search,
         max_iter=NEWTON_OPTIONS["max_iter"], abstol=NEWTON_OPTIONS["abstol"],
         abstol_step=NEWTON_OPTIONS["abstolStep"],
+        residual=lambda w: asm(w, u, p, jacobian=False),
     )  # fmt: skip
 
 
