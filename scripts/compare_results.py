@@ -2,8 +2,10 @@
 
 ``make studies-check`` runs the studies into a scratch folder and then this script, which reads
 every JSON and CSV file a study wrote there and compares it with the file of the same name under
-``results/``.  A number differs when ``|new − old| > rtol · max(1, |old|)``; a flag or word that
-differs, a list that changed length, or a field that disappeared is a difference too.  Fields
+``results/``.  A number differs when ``|new − old| > rtol · |old| + atol`` (``atol`` 1e-12: a
+relative test for every number a study prints, an absolute one only at rounding level); a flag
+or word that differs, a list that changed length, or a field that disappeared is a difference
+too.  Fields
 new in the fresh run are listed but are not drift (the committed file predates them).
 
 Exempt from the 1e-8 rule, because they are not reproducible to it by design:
@@ -11,7 +13,12 @@ Exempt from the 1e-8 rule, because they are not reproducible to it by design:
 * times and counts of work (``time``, ``seconds``, ``wall``, ``cpu``, ``iterations``, …): they
   measure the machine, not the gait;
 * finite-difference estimates (fields named ``*_fd*``): their own accuracy is ~1e-6 … 1e-4
-  (step-size noise), so they are compared to ``--fd-rtol`` (default 1e-3) instead.
+  (step-size noise), so they are compared to ``--fd-rtol`` (default 1e-3) instead;
+* error sizes (fields named ``*error*``, ``*residual*``, ``*gap*``): a discretisation-error
+  estimate or a return error is the size of a rounding-level quantity, reproduced when it stays
+  within a factor of 10 (or both are below ``atol``);
+* numbers within 1e-6 of zero (a constraint's value at its touch point, a residual): compared
+  absolutely, to 1e-9.
 
 Exit status 0 when nothing drifted, 1 otherwise (2 for bad arguments).
 """
@@ -56,15 +63,35 @@ def _number(text: str) -> float | None:
         return None
 
 
-def _close(new: float, old: float, rtol: float) -> bool:
+ATOL = 1e-12  # absolute part of the test: rounding level (set by --atol)
+
+
+NEAR_ZERO = 1e-6  # |old| below this: a residual-level number, compared absolutely
+NEAR_ZERO_ATOL = 1e-9
+
+
+def _is_error_size(key: str) -> bool:
+    key = key.lower()
+    return any(word in key for word in ("error", "residual", "gap"))
+
+
+def _close(new: float, old: float, rtol: float, error_size: bool = False) -> bool:
     if math.isnan(new) and math.isnan(old):
         return True
     if math.isinf(new) or math.isinf(old):
         return new == old
-    return abs(new - old) <= rtol * max(1.0, abs(old))
+    if error_size:
+        if abs(new) <= ATOL and abs(old) <= ATOL:
+            return True
+        return abs(old) > 0 and 0.1 <= abs(new) / abs(old) <= 10.0
+    if abs(old) < NEAR_ZERO:
+        return abs(new - old) <= NEAR_ZERO_ATOL
+    return abs(new - old) <= rtol * abs(old) + ATOL
 
 
-def compare_json(new, old, path: str, rtol: float, fd_rtol: float, found: list, added: list):
+def compare_json(
+    new, old, path: str, rtol: float, fd_rtol: float, found: list, added: list, size=False
+):
     """Walk two JSON values side by side; append ``(path, new, old)`` for each difference."""
     if isinstance(new, dict) and isinstance(old, dict):
         for key in sorted(set(new) | set(old)):
@@ -77,18 +104,19 @@ def compare_json(new, old, path: str, rtol: float, fd_rtol: float, found: list, 
                 found.append((where, "<missing>", old[key]))
             else:
                 tol = fd_rtol if _is_fd(key) else rtol
-                compare_json(new[key], old[key], where, tol, fd_rtol, found, added)
+                flag = size or _is_error_size(key)
+                compare_json(new[key], old[key], where, tol, fd_rtol, found, added, flag)
     elif isinstance(new, list) and isinstance(old, list):
         if len(new) != len(old):
             found.append((path, f"{len(new)} items", f"{len(old)} items"))
             return
         for index, (a, b) in enumerate(zip(new, old, strict=True)):
-            compare_json(a, b, f"{path}[{index}]", rtol, fd_rtol, found, added)
+            compare_json(a, b, f"{path}[{index}]", rtol, fd_rtol, found, added, size)
     elif isinstance(new, bool) or isinstance(old, bool) or new is None or old is None:
         if new != old:
             found.append((path, new, old))
     elif isinstance(new, (int, float)) and isinstance(old, (int, float)):
-        if not _close(float(new), float(old), rtol):
+        if not _close(float(new), float(old), rtol, size):
             found.append((path, new, old))
     elif new != old and not (isinstance(new, str) and isinstance(old, str)):
         found.append((path, new, old))
@@ -126,7 +154,7 @@ def compare_csv(new: Path, old: Path, rtol: float, fd_rtol: float, found: list, 
                     if cell_new != cell_old:
                         found.append((f"row {number} {name}", cell_new, cell_old))
                 continue
-            if not _close(a, b, fd_rtol if _is_fd(name) else rtol):
+            if not _close(a, b, fd_rtol if _is_fd(name) else rtol, _is_error_size(name)):
                 found.append((f"row {number} {name}", a, b))
 
 
@@ -135,9 +163,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("fresh", type=Path, help="folder the studies just wrote (study/…)")
     parser.add_argument("--results", type=Path, default=Path("results"), help="committed results")
     parser.add_argument("--rtol", type=float, default=1e-8, help="relative tolerance (1e-8)")
+    parser.add_argument("--atol", type=float, default=1e-12, help="absolute part (1e-12)")
     parser.add_argument("--fd-rtol", type=float, default=1e-3, help="for *_fd* fields (1e-3)")
     parser.add_argument("--show", type=int, default=12, help="differences shown per file")
     args = parser.parse_args(argv)
+    global ATOL
+    ATOL = args.atol
     if not args.fresh.is_dir():
         print(f"compare_results: fresh={str(args.fresh)!r} is not a folder; run the studies "
               "into it first (make studies-check does)", file=sys.stderr)  # fmt: skip

@@ -193,9 +193,9 @@ def test_readme_walk_run_table_is_the_committed_study_output():
         named = {"walk": "walk", "pendular run": "pendular run", "run": "run"}
         expected = named.get(cheapest, "run sequence, flight at the floor (a walk)")
         assert optimal == expected, speed
-    # The README's bounds over the certified rows: returns within 2.8e-9, discretisation error
-    # <= 5.2e-9, work-energy residual <= 2.1e-10 J (each the largest, as printed).
+    # The README's bounds over the certified rows: returns within 4e-11, discretisation error
+    # <= 4.3e-9, work-energy residual <= 4.9e-11 J (each the largest, as printed).
     good = [r for r in rows.values() if r["certified"] == "True"]
-    assert _printed("2.8e-9", max(float(r["return_error"]) for r in good))
-    assert _printed("5.2e-9", max(float(r["discretisation_error"]) for r in good))
-    assert _printed("2.1e-10", max(abs(float(r["energy_residual_J"])) for r in good))
+    assert _printed("4e-11", max(float(r["return_error"]) for r in good))
+    assert _printed("4.3e-9", max(float(r["discretisation_error"]) for r in good))
+    assert _printed("4.9e-11", max(abs(float(r["energy_residual_J"])) for r in good))
