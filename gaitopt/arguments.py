@@ -25,6 +25,7 @@ __all__ = [
     "check_inputs",
     "section_guess",
     "check_scheduler",
+    "closed_loop_trials",
 ]
 
 
@@ -154,3 +155,40 @@ def check_scheduler(scheduler: object, *, serial: bool = False) -> None:
             f"`scheduler` must be None, {' or '.join(repr(n) for n in names)} or a Dask "
             f"scheduler address such as 'tcp://host:8786', got {scheduler!r:.80}"
         )
+
+
+def closed_loop_trials(
+    model: HybridModel,
+    orbits: Any,
+    perturbation: Any,
+    starts: Any,
+    *,
+    max_perturbation: float,
+    examples: tuple[str, str],
+) -> list[np.ndarray]:
+    """The displacements from the fixed point (section coordinates) from which a stabilised
+    gait's closed loop is simulated for ``orbits`` orbits: ``±perturbation`` along each section
+    coordinate, or the rows of ``starts``.  Refuses ``orbits`` outside 1..1000,
+    ``perturbation`` outside ``(0, max_perturbation]`` (section units) and rows of ``starts``
+    that are not finite vectors of the section's size; ``examples`` are the values suggested
+    for ``orbits`` and ``perturbation``.  Shared by the step-to-step stabilisation of an optimum
+    (:mod:`gaitopt.optimize.stabilisation`) and the transverse LQR (:mod:`gaitopt.transverse`)."""
+    if not isinstance(orbits, int) or isinstance(orbits, bool) or not 1 <= orbits <= 1000:
+        raise GaitoptInputError(
+            f"`orbits` must be an integer in 1..1000, got {orbits!r}; e.g. {examples[0]}"
+        )
+    if not (isinstance(perturbation, (int, float)) and 0 < perturbation <= max_perturbation):
+        raise GaitoptInputError(
+            f"`perturbation` must be a number in (0, {max_perturbation:g}] (section units), got "
+            f"{perturbation!r}; e.g. {examples[1]}"
+        )
+    m = len(model.section.coordinates)
+    if starts is None:
+        return [sign * perturbation * e for e in np.eye(m) for sign in (1.0, -1.0)]
+    displacements = [np.asarray(row, dtype=float).ravel() for row in starts]
+    if not displacements or any(d.size != m or not np.all(np.isfinite(d)) for d in displacements):
+        raise GaitoptInputError(
+            f"`starts` must be rows of {m} finite displacements "
+            f"({', '.join(model.section.coordinates)}), got {starts!r}"
+        )
+    return displacements

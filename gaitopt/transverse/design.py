@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from ..arguments import closed_loop_trials
 from ..errors import GaitoptInputError
 from ..orbit.sensitivity import multipliers
 from .law import LawBudgetExceeded, TransverseLaw
@@ -234,27 +235,11 @@ def transverse_lqr(
             f"{getattr(gait, 'message', type(gait).__name__)!r}; find the gait first"
         )
     Q_stages, R_mat = check_weights(gait.model, Q, R)
-    if not isinstance(orbits, int) or isinstance(orbits, bool) or not 1 <= orbits <= 1000:
-        raise GaitoptInputError(f"`orbits` must be an integer in 1..1000, got {orbits!r}; e.g. 15")
-    if not (isinstance(perturbation, (int, float)) and 0 < perturbation <= 0.5):
-        raise GaitoptInputError(
-            f"`perturbation` must be a number in (0, 0.5] (section units), got "
-            f"{perturbation!r}; e.g. 1e-2"
-        )
+    displacements = closed_loop_trials(
+        gait.model, orbits, perturbation, starts, max_perturbation=0.5, examples=("15", "1e-2")
+    )
     model = gait.model
     s_star = _section_point(gait)
-    m = s_star.size
-    if starts is None:
-        displacements = [sign * perturbation * e for e in np.eye(m) for sign in (1.0, -1.0)]
-    else:
-        displacements = [np.asarray(row, dtype=float).ravel() for row in starts]
-        if not displacements or any(
-            d.size != m or not np.all(np.isfinite(d)) for d in displacements
-        ):
-            raise GaitoptInputError(
-                f"`starts` must be rows of {m} finite displacements "
-                f"({', '.join(model.section.coordinates)}), got {starts!r}"
-            )
     timings: dict[str, float] = {}
     clock = time.perf_counter()
     lin = transverse_linearisation(gait, extension=extension)

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from ...arguments import closed_loop_trials
 from ...errors import GaitoptInputError
 from ..floquet import multipliers_of, return_map_jacobian
 from ..result import OptimalGait
@@ -119,26 +120,11 @@ def stabilise(
             "`gait` carries no transcription (it was not made by this gaitopt's optimize_gait); "
             "re-run gaitopt.optimize_gait"
         )
-    if not isinstance(orbits, int) or isinstance(orbits, bool) or not 1 <= orbits <= 1000:
-        raise GaitoptInputError(f"`orbits` must be an integer in 1..1000, got {orbits!r}; e.g. 20")
-    if not (isinstance(perturbation, (int, float)) and 0 < perturbation <= 0.1):
-        raise GaitoptInputError(
-            f"`perturbation` must be a number in (0, 0.1] (section units), got {perturbation!r}; "
-            f"e.g. 1e-3"
-        )
+    displacements = closed_loop_trials(
+        gait.model, orbits, perturbation, starts, max_perturbation=0.1, examples=("20", "1e-3")
+    )
     model = gait.model
     s_star = section_point(gait)
-    m = s_star.size
-    if starts is None:
-        displacements = [sign * perturbation * e for e in np.eye(m) for sign in (1.0, -1.0)]
-    else:
-        displacements = [np.asarray(row, dtype=float).ravel() for row in starts]
-        bad = [d for d in displacements if d.size != m or not np.all(np.isfinite(d))]
-        if not displacements or bad:
-            raise GaitoptInputError(
-                f"`starts` must be rows of {m} finite displacements "
-                f"({', '.join(model.section.coordinates)}), got {starts!r}"
-            )
 
     col, w = transcription
     A_floquet = return_map_jacobian(col, w, model.p)
