@@ -53,6 +53,7 @@ from gaitopt.models.slip_actuated import SLIP_STRIDE  # noqa: E402
 from gaitopt.optimize import GaitProblem, solve_problem  # noqa: E402
 from gaitopt.optimize.radau import RadauMesh  # noqa: E402
 from gaitopt.optimize.verify import simulate_gait  # noqa: E402
+from gaitopt.optimize.work_check import simulated_work  # noqa: E402
 from gaitopt.plotting import save_figure  # noqa: E402
 
 #: Speed (m/s) of the passive SLIP gait at the slip model's defaults: stride / period, with the
@@ -95,20 +96,8 @@ def energy_balance(gait) -> dict[str, float]:
     model = gait.model
     x0 = model.state_vector(gait.fixed_point)
     sim = simulate_gait(problem_at(gait.speed, "effort"), model, x0, gait.profiles, 1)
-    nodes, weights = np.polynomial.legendre.leggauss(8)
-    prof = gait.profiles[0]
-    pos = neg = 0.0
-    for arc in sim.arcs:
-        if arc.phase != 0:
-            continue  # the actuator does no work in flight
-        inner = prof.breaks[(prof.breaks > arc.t0 + 1e-12) & (prof.breaks < arc.t1 - 1e-12)]
-        edges = np.unique(np.concatenate([np.linspace(arc.t0, arc.t1, 65), inner]))
-        for a, b in zip(edges[:-1], edges[1:], strict=True):
-            ts = (a + b) / 2 + (b - a) / 2 * nodes
-            xs = arc.solution(ts)
-            power = np.array([float(prof(t)[0]) for t in ts]) * xs[2]  # F ṙ
-            pos += (b - a) / 2 * float(np.dot(weights, np.maximum(power, 0.0)))
-            neg += (b - a) / 2 * float(np.dot(weights, np.minimum(power, 0.0)))
+    # F ṙ on the stance arcs (the actuator does no work in flight)
+    pos, neg = simulated_work(sim, gait.profiles[0], 2)
     return {"positive_work": pos, "negative_work": neg, "residual": pos + neg}
 
 

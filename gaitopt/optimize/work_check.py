@@ -119,3 +119,31 @@ def _impulse_work(col: Collocation, sol: dict[str, Any]) -> float:
         X, U = sol["X"][k], sol["U"][k]
         total += float(problem.impulse_work(i, X[:, -1], U[:, -1], sol["p"]))
     return total
+
+
+def simulated_work(
+    sim: Any, profile: Any, rate_index: int, *, phase: int = 0, panels: int = 64
+) -> tuple[float, float]:
+    """Positive and negative work (J) of a one-input feedforward ``profile`` on the arcs of
+    ``phase`` of an independent simulation ``sim`` (:func:`gaitopt.simulate` with the profile):
+    ``∫ max(0, u ẏ) dt`` and ``∫ min(0, u ẏ) dt`` with ``ẏ`` the state ``rate_index`` (the rate
+    the input works against, e.g. a leg force's ṙ), by Gauss–Legendre quadrature
+    (:data:`GAUSS_POINTS` points on ``panels`` panels per arc, split at the profile's
+    breakpoints).  The studies' work–energy balances (a simulated period's W⁺ + W⁻ against the
+    energy it must return) use it."""
+    nodes, weights = np.polynomial.legendre.leggauss(GAUSS_POINTS)
+    pos = neg = 0.0
+    for arc in sim.arcs:
+        if arc.phase != phase:
+            continue
+        inner = profile.breaks[
+            (profile.breaks > arc.t0 + 1e-12) & (profile.breaks < arc.t1 - 1e-12)
+        ]
+        edges = np.unique(np.concatenate([np.linspace(arc.t0, arc.t1, panels + 1), inner]))
+        for a, b in zip(edges[:-1], edges[1:], strict=True):
+            ts = (a + b) / 2 + (b - a) / 2 * nodes
+            xs = arc.solution(ts)
+            power = np.array([float(profile(t)[0]) for t in ts]) * xs[rate_index]
+            pos += (b - a) / 2 * float(np.dot(weights, np.maximum(power, 0.0)))
+            neg += (b - a) / 2 * float(np.dot(weights, np.minimum(power, 0.0)))
+    return pos, neg
