@@ -146,7 +146,11 @@ CASADI_SYMBOL_EXPORT int gaitopt_batch(
   for (i = 0; i < P; i++) { /* open every phase's calls once */
     void** t = fns + 10 * i;
     if (gaitopt_open(&ev_calls[i], t[2], t[3])) { code = -1; goto done; }
-    if (gaitopt_open(&exc_calls[i], t[8], t[9])) { gaitopt_close(&ev_calls[i]); code = -1; goto done; }
+    if (gaitopt_open(&exc_calls[i], t[8], t[9])) {
+      gaitopt_close(&ev_calls[i]);
+      code = -1;
+      goto done;
+    }
     opened = i + 1;
     if (starts[2 * i]) {
       if (gaitopt_open(&start_calls[i], starts[2 * i], starts[2 * i + 1])) { code = -1; goto done; }

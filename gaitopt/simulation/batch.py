@@ -229,8 +229,13 @@ def simulate_batch(
         model=model,
         **out,
         elapsed=time.perf_counter() - started,
-        settings={"steps": steps, "rtol": rtol, "atol": atol, "max_phase_time": max_phase_time,
-                  "backend": "compiled" if library is not None else "numpy"},  # fmt: skip
+        settings={
+            "steps": steps,
+            "rtol": rtol,
+            "atol": atol,
+            "max_phase_time": max_phase_time,
+            "backend": "compiled" if library is not None else "numpy",
+        },  # fmt: skip
     )
 
 

@@ -119,10 +119,12 @@ def run_compiled(run, model, library: ArcLibrary, rows, u, full_state, steps, rt
     events = None
     while True:  # once, or again for the starts whose events overflowed their buffer
         k = todo.size
-        dims = np.array([k, len(model.phases), lay.E, steps, len(model.inputs),
-                         0 if shared_u else len(model.inputs), lay.nmax, cap], dtype=np.int32)  # fmt: skip
-        st, la, re, te, pe, ac = (status[todo].copy(), last[todo].copy(), returns[todo].copy(),
-                                  t_end[todo].copy(), phase_end[todo].copy(), acc[todo].copy())  # fmt: skip
+        n_u = len(model.inputs)
+        dims = [k, len(model.phases), lay.E, steps, n_u, 0 if shared_u else n_u, lay.nmax, cap]
+        dims = np.array(dims, dtype=np.int32)
+        st, la, re, te, pe, ac = (
+            a[todo].copy() for a in (status, last, returns, t_end, phase_end, acc)
+        )
         sx = np.full((k, steps + 1, n0), np.nan)
         stt = np.full((k, steps + 1), np.nan)
         counts = np.zeros(max(k, 1), dtype=np.int32)
