@@ -27,12 +27,15 @@ __all__ = [
 ]
 
 
-def classify(setup: Mapping[str, Any], model: Any, start: np.ndarray) -> str:
+def classify(
+    setup: Mapping[str, Any], model: Any, start: np.ndarray, backend: str = "auto"
+) -> str:
     """``"converged"`` or why not, for one start in section coordinates (every coordinate).
 
     One simulation of ``steps + hold`` periods (one call, so that the simulator sees an
     accumulation of impacts whole): converged if it completes and, from some period at most
-    ``steps`` on, every period's return is within ``tol`` (scaled) of the fixed point."""
+    ``steps`` on, every period's return is within ``tol`` (scaled) of the fixed point.
+    ``backend``: :func:`gaitopt.simulate`'s (``"python"``: SciPy's stepper from Python)."""
     from ..errors import StateError
     from ..simulation import simulate
 
@@ -40,9 +43,8 @@ def classify(setup: Mapping[str, Any], model: Any, start: np.ndarray) -> str:
     period, tol = setup["period"], setup["tol"]
     x = dict(zip(setup["coordinates"], map(float, start), strict=True))
     try:
-        sim = simulate(
-            model, x, steps=(setup["steps"] + setup["hold"]) * period, inputs=setup["inputs"]
-        )
+        sim = simulate(model, x, steps=(setup["steps"] + setup["hold"]) * period,
+                       inputs=setup["inputs"], backend=backend)  # fmt: skip
     except (GaitoptInputError, StateError):  # not a start of this model (off its section)
         return "invalid start"
     if not sim.success:
