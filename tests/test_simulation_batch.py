@@ -221,3 +221,21 @@ def test_without_a_compiler_the_numpy_batch_runs(compass, monkeypatch):
         simulate_batch(compass, starts, steps=3, backend="compiled")
     with pytest.raises(gaitopt.GaitoptInputError, match="`backend`"):
         simulate_batch(compass, starts, steps=3, backend="fast")
+
+
+def test_compiled_batch_runs_again_the_starts_whose_events_overflow(compass, monkeypatch):
+    """With room for only 8 events per start (EVENTS_PER_STEP = 0), the starts with more run
+    again with four times the room: the same columns and events as with ample room (exact: the
+    same simulation, run again)."""
+    from gaitopt.simulation import batch_compiled
+
+    centre = compass.section_vector(compass.default_start())
+    starts = centre * np.array([[1.0, 1.0, 1.0], [1.2, 0.9, 1.1], [1.02, 1.0, 0.98]])
+    ample = simulate_batch(compass, starts, steps=20, record_events=True, backend="compiled")
+    monkeypatch.setattr(batch_compiled, "EVENTS_PER_STEP", 0)
+    tight = simulate_batch(compass, starts, steps=20, record_events=True, backend="compiled")
+    assert max(np.bincount(tight.events["start"])) > 8  # some start did overflow 8
+    assert tight.status.tolist() == ample.status.tolist()
+    np.testing.assert_array_equal(tight.section_states, ample.section_states)
+    for key in ample.events:
+        np.testing.assert_array_equal(tight.events[key], ample.events[key])

@@ -27,9 +27,7 @@ __all__ = [
 ]
 
 
-def classify(
-    setup: Mapping[str, Any], model: Any, start: np.ndarray, backend: str = "auto"
-) -> str:
+def classify(setup: Mapping[str, Any], model: Any, start: np.ndarray, backend: str = "auto") -> str:
     """``"converged"`` or why not, for one start in section coordinates (every coordinate).
 
     One simulation of ``steps + hold`` periods (one call, so that the simulator sees an

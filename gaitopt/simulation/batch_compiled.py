@@ -14,6 +14,7 @@ and a C compiler is present (else the NumPy batch, :mod:`gaitopt.simulation.batc
 from __future__ import annotations
 
 import ctypes
+import threading
 from functools import lru_cache
 
 import numpy as np
@@ -24,7 +25,13 @@ from .vectorised import Mapped
 
 __all__ = ["run_compiled"]
 
+#: Events kept per start and step (and per phase of the model) before a start's buffer
+#: overflows and it runs again with four times the room.
+EVENTS_PER_STEP = 4
 _OVERFLOW = STATUS_CODES.index("overflow")
+#: The mapped lift and flow write their shared buffers: one thread at a time (a Dask worker's
+#: threads may run two batches at once; the C call itself shares nothing).
+_LOCK = threading.Lock()
 _INVALID = STATUS_CODES.index("invalid start")
 
 
@@ -84,7 +91,7 @@ def _prepared(model_cls, library: ArcLibrary, constraints: bool):
 def _starts(prepared, model, rows: np.ndarray, u: np.ndarray, full_state: bool):
     """Phase-0 states of the rows and which are states of the model (finite, finite rate)."""
     m, p = rows.shape[0], model.p
-    with np.errstate(all="ignore"):
+    with np.errstate(all="ignore"), _LOCK:
         x = rows.copy() if full_state else prepared[1](m, rows, p)[0]
         rate = prepared[2](m, x, u, p)[0]
     valid = np.all(np.isfinite(x), axis=1) & np.all(np.isfinite(rate), axis=1)
@@ -114,7 +121,7 @@ def run_compiled(run, model, library: ArcLibrary, rows, u, full_state, steps, rt
     phase_end = np.zeros(N, dtype=np.int32)
     sec_t = np.full((N, steps + 1), np.nan)
     sec_x = np.full((N, steps + 1, n0), np.nan)
-    cap = (4 * (steps + 1) * len(model.phases) + 8) if record_events else 0
+    cap = (EVENTS_PER_STEP * (steps + 1) * len(model.phases) + 8) if record_events else 0
     todo = np.arange(N)
     events = None
     while True:  # once, or again for the starts whose events overflowed their buffer
@@ -175,8 +182,8 @@ def _events(lay, todo, counts, cap, ev_t, ev_code, ev_b, ev_a, st) -> dict:
     """The events of one call as columns (starts that overflowed left out: they run again)."""
     keep = st != _OVERFLOW
     counts = np.where(keep, counts, 0)
-    rows = np.concatenate([np.arange(i * cap, i * cap + c) for i, c in enumerate(counts)] or
-                          [np.zeros(0, dtype=int)]).astype(int)  # fmt: skip
+    first = np.repeat(np.arange(counts.size) * cap - np.cumsum(counts) + counts, counts)
+    rows = (first + np.arange(first.size)).astype(int)  # start i's events: i * cap + 0, 1, …
     codes = ev_code[rows] if rows.size else np.zeros(0, dtype=np.int32)
     names = np.array(lay.names, dtype=object)
     return {
