@@ -187,8 +187,9 @@ def _exactly(model, starts: np.ndarray, steps: int, **options) -> list[str]:
 
 def test_compiled_batch_equals_simulate_to_the_bit(compass):
     """Compass-gait starts within ±30 % (seeded: walking, falls, trips), rimless-wheel starts that
-    rock to rest (impacts accumulating: "standing") and compass starts with a phase time limit
-    too short for a step ("timeout")."""
+    rock to rest (impacts accumulating: "standing"), compass starts with a phase time limit too
+    short for a step ("timeout"), without the unilateral constraints, and with a hip torque per
+    start."""
     centre = compass.section_vector(compass.default_start())
     rng = np.random.default_rng(5)
     starts = centre * (1 + 0.3 * (2 * rng.random((12, centre.size)) - 1))
@@ -199,6 +200,16 @@ def test_compiled_batch_equals_simulate_to_the_bit(compass):
         "standing", "completed"
     }  # fmt: skip
     assert _exactly(compass, starts[:2], steps=2, max_phase_time=0.05) == ["timeout"] * 2
+    _exactly(compass, starts[:4], steps=3, constraints=False)
+    # a hip torque per start (seeded): each row against gaitopt.simulate with its own input
+    torques = rng.normal(0.0, 0.5, (4, 1))
+    batch = simulate_batch(compass, starts[:4], steps=3, inputs=torques, backend="compiled")
+    for i, (start, torque) in enumerate(zip(starts[:4], torques, strict=True)):
+        x0 = dict(zip(compass.section.coordinates, start, strict=True))
+        ref = gaitopt.simulate(compass, x0, steps=3, inputs=torque, backend="compiled")
+        assert batch.status[i] == ref.status
+        np.testing.assert_array_equal(batch.section_states[i, : ref.steps + 1],
+                                      ref.section_states)  # fmt: skip
 
 
 def test_without_a_compiler_the_numpy_batch_runs(compass, monkeypatch):
