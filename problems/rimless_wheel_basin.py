@@ -44,6 +44,7 @@ from matplotlib.colors import ListedColormap  # noqa: E402
 import gaitopt  # noqa: E402
 from gaitopt.files import write_csv, write_json  # noqa: E402
 from gaitopt.plotting import save_figure  # noqa: E402
+from gaitopt.returnmap import return_map  # noqa: E402
 
 ROLLING, STANDING, UNDECIDED = 1, 0, -1
 _RATE_RANGE = 4.0  # rad/s: the basins are charted for |θ̇| ≤ 4
@@ -94,6 +95,17 @@ def fate_simulated(model, state) -> int:
     return UNDECIDED
 
 
+def fates_simulated(model, rows, full_state: bool = False) -> np.ndarray:
+    """:func:`fate_simulated` of many starts at once (rows of section coordinates, or with
+    ``full_state`` of phase-0 states): the batch simulation, the same simulations and rule."""
+    from gaitopt.simulation.batch import simulate_batch
+
+    batch = simulate_batch(model, rows, steps=_SIM_STEPS, full_state=full_state)
+    last = batch.section_states[:, -1, 1]  # NaN where the steps were not completed
+    rolling = batch.success & (np.abs(last - model.rolling_speed()) < 1e-4)
+    return np.where(batch.status == "standing", STANDING, np.where(rolling, ROLLING, UNDECIDED))
+
+
 def intervals(grid: np.ndarray, fate: np.ndarray, value: int) -> list[list[float]]:
     """Maximal runs of ``fate == value`` on the grid, as [first, last] grid points."""
     runs, start = [], None
@@ -128,7 +140,7 @@ def main(argv: list[str] | None = None) -> int:
     sec_cf = np.linspace(-_RATE_RANGE, _RATE_RANGE, n_sec_cf)
     fate_cf = np.array([fate_closed_form(model, w) for w in sec_cf])
     sec_sim = np.linspace(-_RATE_RANGE, _RATE_RANGE, n_sec_sim)
-    fate_sec_sim = np.array([fate_simulated(model, {"theta_dot": w}) for w in sec_sim])
+    fate_sec_sim = fates_simulated(model, sec_sim[:, None])
     fate_sec_ref = np.array([fate_closed_form(model, w) for w in sec_sim])
     write_csv(
         ["theta_dot", "fate_simulated", "fate_closed_form"],
@@ -149,9 +161,8 @@ def main(argv: list[str] | None = None) -> int:
         [[fate_closed_form(model, first_impact(model, th, w)) for th in th_cf] for w in rt_cf]
     )
     th_sim, rt_sim = plane(n_plane_sim)
-    plane_sim = np.array(
-        [[fate_simulated(model, {"theta": th, "theta_dot": w}) for th in th_sim] for w in rt_sim]
-    )
+    plane_rows = np.array([[th, w] for w in rt_sim for th in th_sim])  # phase-0 states
+    plane_sim = fates_simulated(model, plane_rows, full_state=True).reshape(len(rt_sim), -1)
     plane_ref = np.array(
         [[fate_closed_form(model, first_impact(model, th, w)) for th in th_sim] for w in rt_sim]
     )
@@ -317,7 +328,7 @@ def _map_panel(ax, model, lo: float, hi: float, starts: list[tuple[float, str]])
     values_broken[1:][jumps] = np.nan
     ax.plot(fine, values_broken, color="C0", lw=1.8, label="closed-form map (Tedrake)")
     coarse = np.linspace(lo, hi, 23)
-    simulated = [gaitopt.returnmap.return_map(model, w)[0] for w in coarse]
+    simulated = [return_map(model, w)[0] for w in coarse]
     ax.plot(coarse, simulated, "o", ms=3.5, mfc="none", color="k", label="simulated (one impact)")
     ax.plot([lo, hi], [lo, hi], color="k", lw=0.7, ls=":", label="diagonal")
     for w, name in ((w1, r"$\omega_1$"), (w2, r"$\omega_2$")):

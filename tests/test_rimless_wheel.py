@@ -231,6 +231,9 @@ def test_basin_study_classifications_agree_with_simulation():
     for omega, fate in expected.items():
         assert study.fate_closed_form(model, omega) == fate
         assert study.fate_simulated(model, {"theta_dot": omega}) == fate
+    # the study's batch of the same starts (simulate_batch): the same fates
+    rates = np.array(list(expected))[:, None]
+    assert study.fates_simulated(model, rates).tolist() == list(expected.values())
     # In the plane: first impact by energy vs simulated first impact.
     for theta, rate in ((0.1, -0.5), (-0.2, 0.8), (0.3, -2.5)):
         sim = gaitopt.simulate(model, {"theta": theta, "theta_dot": rate}, steps=1)

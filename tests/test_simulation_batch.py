@@ -1,7 +1,9 @@
 """The batch simulation (gaitopt.simulation.batch) against the per-start simulation
 (gaitopt.simulate, the referee): the same events (times, states, names) and the same outcome for
 every registered passive model's default start and perturbed starts, a Hypothesis property over
-compass-gait starts, the basin's classification both ways, and bad input.
+compass-gait starts, the basin's classification both ways, and bad input — for both backends of
+the batch: the compiled one (every start run to its end in one C call, gaitopt.simulation
+.batch_compiled) and the NumPy one (gaitopt.simulation.batch_phase).
 
 Tolerance of the event agreement: 1e-10 (s, and state units, relative to 1 + |x|).  Both run
 the same method (SciPy's DOP853 control and the same compiled step; Brent's method, the same
@@ -27,9 +29,9 @@ _SLOW = {"strandbeest"}
 PASSIVE = sorted(n for n, c in gaitopt.REGISTRY.items() if c.passive_gait and n not in _SLOW)
 
 
-def _agree(model, starts: np.ndarray, steps: int) -> None:
+def _agree(model, starts: np.ndarray, steps: int, backend: str = "auto") -> None:
     """Every start's events and outcome agree between the batch and the per-start simulation."""
-    batch = simulate_batch(model, starts, steps=steps, record_events=True)
+    batch = simulate_batch(model, starts, steps=steps, record_events=True, backend=backend)
     for i, start in enumerate(starts):
         try:
             ref = gaitopt.simulate(
@@ -57,15 +59,16 @@ def _agree(model, starts: np.ndarray, steps: int) -> None:
                                    atol=TOL)  # fmt: skip
 
 
+@pytest.mark.parametrize("backend", ["compiled", "numpy"])
 @pytest.mark.parametrize("name", PASSIVE)
-def test_batch_events_agree_with_simulate_on_every_passive_model(name):
+def test_batch_events_agree_with_simulate_on_every_passive_model(name, backend):
     """Default start and five starts perturbed by up to 5 % (seeded), four returns each."""
     model = gaitopt.model(name)
     centre = model.section_vector(model.default_start())
     rng = np.random.default_rng(1)
     scale = np.where(np.abs(centre) > 0, np.abs(centre), 1.0)
     starts = centre + 0.05 * scale * (2 * rng.random((5, centre.size)) - 1)
-    _agree(model, np.vstack([centre, starts]), steps=4)
+    _agree(model, np.vstack([centre, starts]), steps=4, backend=backend)
 
 
 @pytest.fixture(scope="module")
@@ -85,8 +88,9 @@ def test_batch_agrees_with_simulate_over_compass_starts(compass, offset):
 
 
 def test_basin_classification_batch_equals_per_start():
-    """gaitopt.basin's batch classification and its per-start rule give the same outcome for 24
-    seeded compass-gait starts in x* ± 30 % |x*| (converged, fell, not converged)."""
+    """gaitopt.basin's batch classification (the compiled batch) and its per-start rule give the
+    same outcome for 24 seeded compass-gait starts in x* ± 30 % |x*| (converged, fell, not
+    converged)."""
     from gaitopt.basin.checks import check_setup
     from gaitopt.basin.classify import classify, classify_many, model_of
 
@@ -99,6 +103,9 @@ def test_basin_classification_batch_equals_per_start():
     per_start = [classify(setup, model, s) for s in starts]
     assert classify_many(setup, model, starts) == per_start
     assert len(set(per_start)) >= 2  # the sample is not all one outcome
+    # the brute-force loop (SciPy's stepper from Python: an independent integration of the same
+    # equations) classifies eight of them alike
+    assert [classify(setup, model, s, backend="python") for s in starts[:8]] == per_start[:8]
 
 
 def test_invalid_rows_and_bad_input(compass):
@@ -113,13 +120,18 @@ def test_invalid_rows_and_bad_input(compass):
         simulate_batch(compass, [centre], inputs=[1.0, 2.0])
 
 
-def test_rays_in_lockstep_equal_rays_one_by_one():
-    """gaitopt.basin's 16 rays in a batch (the scans together, three halvings per round from
-    every midpoint they can visit) give exactly the radii, first failures and flags of the rays
-    bisected one by one with one simulation per start (no tolerance: the same midpoints, the
-    same classifications)."""
+@pytest.mark.parametrize("backend", ["numpy", "auto"])
+def test_rays_in_lockstep_equal_rays_one_by_one(backend, monkeypatch):
+    """gaitopt.basin's 16 rays in a batch (the scans together; with the NumPy batch three
+    halvings per round from every midpoint they can visit, with the compiled one a halving per
+    round) give exactly the radii, first failures and flags of the rays bisected one by one with
+    one simulation per start (no tolerance: the same midpoints, the same classifications)."""
+    from gaitopt.basin import classify
     from gaitopt.basin.checks import check_setup
     from gaitopt.basin.rays import ray_directions, rays_batch, rays_task
+    from gaitopt.simulation.batch import compiled_batch
+
+    monkeypatch.setattr(classify, "BACKEND", backend)
 
     gait = gaitopt.find_limit_cycle(gaitopt.model("compass_gait"))
     setup = check_setup(gait, 12, 3, 1e-4, None)
@@ -138,7 +150,103 @@ def test_rays_in_lockstep_equal_rays_one_by_one():
         assert ray_a["first_failure"] == ray_b["first_failure"]
         assert ray_a["beyond"] == ray_b["beyond"]
     assert any(r["rays"][0]["first_failure"] is not None for r in alone)  # something bisected
-    # the batch simulated every midpoint of its rounds (more starts than one by one): it did
-    # take several halvings per round
-    pairs = zip(together, alone, strict=True)
-    assert any(a["rays"][0]["runs"] > b["rays"][0]["runs"] for a, b in pairs)
+    # the NumPy batch simulated every midpoint of its rounds (more starts than one by one): it
+    # did take several halvings per round; the compiled batch simulates as many as one by one
+    pairs = list(zip(together, alone, strict=True))
+    if backend == "numpy" or not compiled_batch(gaitopt.model("compass_gait")):
+        assert any(a["rays"][0]["runs"] > b["rays"][0]["runs"] for a, b in pairs)
+    else:
+        assert all(a["rays"][0]["runs"] == b["rays"][0]["runs"] for a, b in pairs)
+
+
+def _exactly(model, starts: np.ndarray, steps: int, **options) -> list[str]:
+    """The compiled batch against gaitopt.simulate's compiled backend, start by start: the same
+    status, steps, event names and phases, and event times and states, section states and
+    accumulation times equal to the last bit (both run the same C arc driver on the same
+    compiled functions in the same order, so no tolerance is needed).  Returns the statuses."""
+    batch = simulate_batch(model, starts, steps=steps, record_events=True, backend="compiled",
+                           **options)  # fmt: skip
+    for i, start in enumerate(starts):
+        x0 = dict(zip(model.section.coordinates, start, strict=True))
+        ref = gaitopt.simulate(model, x0, steps=steps, backend="compiled", **options)
+        assert (batch.status[i], batch.steps[i]) == (ref.status, ref.steps)
+        assert batch.t_end[i] == max([0.0] + [a.t1 for a in ref.arcs] + [e.t for e in ref.events])
+        events = batch.events_of(i)
+        assert [(e[2], e[1]) for e in events] == [(e.transition, e.phase) for e in ref.events]
+        for mine, theirs in zip(events, ref.events, strict=True):
+            assert mine[0] == theirs.t
+            np.testing.assert_array_equal(mine[3], theirs.state_before)
+            if theirs.state_after is not None:
+                np.testing.assert_array_equal(mine[4], theirs.state_after)
+        np.testing.assert_array_equal(batch.section_states[i, : ref.steps + 1],
+                                      ref.section_states)  # fmt: skip
+        if ref.status == "standing":
+            assert batch.accumulation_time[i] == ref.accumulation_time
+    return batch.status.tolist()
+
+
+def test_compiled_batch_equals_simulate_to_the_bit(compass):
+    """Compass-gait starts within ±30 % (seeded: walking, falls, trips), rimless-wheel starts that
+    rock to rest (impacts accumulating: "standing"), compass starts with a phase time limit too
+    short for a step ("timeout"), without the unilateral constraints, and with a hip torque per
+    start."""
+    centre = compass.section_vector(compass.default_start())
+    rng = np.random.default_rng(5)
+    starts = centre * (1 + 0.3 * (2 * rng.random((12, centre.size)) - 1))
+    found = set(_exactly(compass, starts, steps=8))
+    assert {"completed", "fell"} <= found
+    wheel = gaitopt.model("rimless_wheel")
+    assert set(_exactly(wheel, np.array([[0.5], [-0.5], [2.0]]), steps=40)) == {
+        "standing", "completed"
+    }  # fmt: skip
+    assert _exactly(compass, starts[:2], steps=2, max_phase_time=0.05) == ["timeout"] * 2
+    _exactly(compass, starts[:4], steps=3, constraints=False)
+    # a hip torque per start (seeded): each row against gaitopt.simulate with its own input
+    torques = rng.normal(0.0, 0.5, (4, 1))
+    batch = simulate_batch(compass, starts[:4], steps=3, inputs=torques, backend="compiled")
+    for i, (start, torque) in enumerate(zip(starts[:4], torques, strict=True)):
+        x0 = dict(zip(compass.section.coordinates, start, strict=True))
+        ref = gaitopt.simulate(compass, x0, steps=3, inputs=torque, backend="compiled")
+        assert batch.status[i] == ref.status
+        np.testing.assert_array_equal(batch.section_states[i, : ref.steps + 1],
+                                      ref.section_states)  # fmt: skip
+
+
+def test_without_a_compiler_the_numpy_batch_runs(compass, monkeypatch):
+    """No compiled batch library (no C compiler, GAITOPT_COMPILE=0): backend "auto" falls back to
+    the NumPy batch with the same outcomes; "compiled" is one line naming `backend`."""
+    from gaitopt.kernels import batch_driver
+
+    centre = compass.section_vector(compass.default_start())
+    starts = centre * np.array([[1.0, 1.0, 1.0], [1.2, 0.9, 1.1]])
+    compiled = simulate_batch(compass, starts, steps=3)
+    assert compiled.settings["backend"] == "compiled"
+    monkeypatch.setattr(batch_driver, "batch_library", lambda verbose=True: None)
+    fallback = simulate_batch(compass, starts, steps=3)
+    assert fallback.settings["backend"] == "numpy"
+    assert fallback.status.tolist() == compiled.status.tolist()
+    # the same method: the section states agree to the events' tolerance (module docstring)
+    np.testing.assert_allclose(fallback.section_states, compiled.section_states, rtol=TOL,
+                               atol=TOL)  # fmt: skip
+    with pytest.raises(gaitopt.GaitoptInputError, match="`backend`"):
+        simulate_batch(compass, starts, steps=3, backend="compiled")
+    with pytest.raises(gaitopt.GaitoptInputError, match="`backend`"):
+        simulate_batch(compass, starts, steps=3, backend="fast")
+
+
+def test_compiled_batch_runs_again_the_starts_whose_events_overflow(compass, monkeypatch):
+    """With room for only 8 events per start (EVENTS_PER_STEP = 0), the starts with more run
+    again with four times the room: the same columns and events as with ample room (exact: the
+    same simulation, run again)."""
+    from gaitopt.simulation import batch_compiled
+
+    centre = compass.section_vector(compass.default_start())
+    starts = centre * np.array([[1.0, 1.0, 1.0], [1.2, 0.9, 1.1], [1.02, 1.0, 0.98]])
+    ample = simulate_batch(compass, starts, steps=20, record_events=True, backend="compiled")
+    monkeypatch.setattr(batch_compiled, "EVENTS_PER_STEP", 0)
+    tight = simulate_batch(compass, starts, steps=20, record_events=True, backend="compiled")
+    assert max(np.bincount(tight.events["start"])) > 8  # some start did overflow 8
+    assert tight.status.tolist() == ample.status.tolist()
+    np.testing.assert_array_equal(tight.section_states, ample.section_states)
+    for key in ample.events:
+        np.testing.assert_array_equal(tight.events[key], ample.events[key])

@@ -26,10 +26,10 @@ Each estimate runs on :func:`gaitopt.sweep.sweep`, one point per ray or start, s
 serially by default (``scheduler=None``), on a local Dask cluster (``"local"``) or a running
 scheduler (``"tcp://host:8786"``).  The starts are classified by the batch simulation
 (:func:`gaitopt.simulation.batch.simulate_batch`, the algorithm of :func:`gaitopt.simulate` on
-many starts at once): serially every start of an estimate in one batch, on Dask each task's
-chunk (the tasks' ``batched`` versions); the rays' scans in one batch and their bisection
-several halvings per batch; fewer than :data:`~gaitopt.basin.classify.SMALL` starts one by
-one.
+many starts at once, compiled where there is a C compiler): serially every start of an estimate
+in one batch, on Dask each task's chunk (the tasks' ``batched`` versions); the rays' scans in one
+batch and each halving of their bisection in one (with the NumPy batch several halvings per
+batch, and fewer than :data:`~gaitopt.basin.classify.SMALL` starts one by one).
 
 Modules: :mod:`~gaitopt.basin.results` (the three results), :mod:`~gaitopt.basin.checks` (the
 shared settings and limits), :mod:`~gaitopt.basin.classify` (one start's fate, the tasks, the

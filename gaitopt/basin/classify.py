@@ -14,9 +14,11 @@ from ..arguments import check_scheduler
 from ..errors import GaitoptInputError
 
 __all__ = [
+    "BACKEND",
     "BLOCK",
     "SMALL",
     "classify",
+    "small",
     "classify_many",
     "model_of",
     "run_tasks",
@@ -25,12 +27,13 @@ __all__ = [
 ]
 
 
-def classify(setup: Mapping[str, Any], model: Any, start: np.ndarray) -> str:
+def classify(setup: Mapping[str, Any], model: Any, start: np.ndarray, backend: str = "auto") -> str:
     """``"converged"`` or why not, for one start in section coordinates (every coordinate).
 
     One simulation of ``steps + hold`` periods (one call, so that the simulator sees an
     accumulation of impacts whole): converged if it completes and, from some period at most
-    ``steps`` on, every period's return is within ``tol`` (scaled) of the fixed point."""
+    ``steps`` on, every period's return is within ``tol`` (scaled) of the fixed point.
+    ``backend``: :func:`gaitopt.simulate`'s (``"python"``: SciPy's stepper from Python)."""
     from ..errors import StateError
     from ..simulation import simulate
 
@@ -38,9 +41,8 @@ def classify(setup: Mapping[str, Any], model: Any, start: np.ndarray) -> str:
     period, tol = setup["period"], setup["tol"]
     x = dict(zip(setup["coordinates"], map(float, start), strict=True))
     try:
-        sim = simulate(
-            model, x, steps=(setup["steps"] + setup["hold"]) * period, inputs=setup["inputs"]
-        )
+        sim = simulate(model, x, steps=(setup["steps"] + setup["hold"]) * period,
+                       inputs=setup["inputs"], backend=backend)  # fmt: skip
     except (GaitoptInputError, StateError):  # not a start of this model (off its section)
         return "invalid start"
     if not sim.success:
@@ -55,10 +57,23 @@ def classify(setup: Mapping[str, Any], model: Any, start: np.ndarray) -> str:
 
 #: Starts per call of the batch simulation (bounds its memory: about 2 kB per start and step).
 BLOCK = 4096
-#: Fewer starts than this go one by one (gaitopt.simulate): a batch costs about 1.4 ms of CPU
-#: per step try of all its starts together, a compass-gait start alone about 36 ms in all, so
-#: below some 40 starts the loop is faster (bench/basin.py's anatomy).
+#: Fewer starts than this go one by one (gaitopt.simulate) where the batch runs from NumPy: it
+#: costs about 1.4 ms of CPU per step try of all its starts together, a compass-gait start alone
+#: about 36 ms in all, so below some 40 starts the loop is faster (bench/basin.py's anatomy).  The
+#: compiled batch (:mod:`gaitopt.simulation.batch_compiled`) has no such cost: every start goes
+#: through it (:func:`small`).
 SMALL = 48
+#: The batch simulation's ``backend`` (:func:`gaitopt.simulation.batch.simulate_batch`):
+#: ``"auto"`` (compiled where it can be), ``"compiled"`` or ``"numpy"``.
+BACKEND = "auto"
+
+
+def small(model: Any) -> int:
+    """Fewer starts than this are classified one by one: :data:`SMALL` for the NumPy batch, 1
+    where the batch is compiled."""
+    from ..simulation.batch import compiled_batch
+
+    return 1 if BACKEND != "numpy" and compiled_batch(model) else SMALL
 
 
 def classify_many(setup: Mapping[str, Any], model: Any, starts: np.ndarray) -> list[str]:
@@ -72,13 +87,12 @@ def classify_many(setup: Mapping[str, Any], model: Any, starts: np.ndarray) -> l
     index = [model.state_names.index(c) for c in setup["coordinates"]]
     outcomes: list[str] = []
     starts = np.atleast_2d(np.asarray(starts, dtype=float))
-    if len(starts) < SMALL:  # too few to repay the batch's fixed cost per step try
+    if len(starts) < small(model):  # too few to repay the NumPy batch's cost per step try
         return [classify(setup, model, start) for start in starts]
     for k in range(0, len(starts), BLOCK):
         block = starts[k : k + BLOCK]
-        sim = simulate_batch(
-            model, block, steps=(steps + setup["hold"]) * period, inputs=setup["inputs"]
-        )
+        sim = simulate_batch(model, block, steps=(steps + setup["hold"]) * period,
+                             inputs=setup["inputs"], backend=BACKEND)  # fmt: skip
         returns = sim.section_states[:, period::period][:, :, index]  # starts × periods × s
         within = np.all(np.abs(returns - centre) <= tol * scale, axis=2)  # NaN compares False
         outside = ~within

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .classify import SMALL, classify, classify_many, model_of
+from .classify import classify, classify_many, model_of, small
 
 __all__ = ["midpoints", "ray_directions", "rays_batch", "rays_task"]
 
@@ -85,9 +85,10 @@ def rays_batch(points: list[Mapping[str, Any]]) -> list[dict[str, Any]]:
         # several halvings per batch: every midpoint the next `levels` halvings of each ray can
         # visit (2**levels - 1, by the same 0.5 * (low + high) as one halving at a time, so the
         # radii are those of sequential bisection), enough for a batch of _BISECT starts
-        # (few rays: one halving at a time, start by start, as many simulations as one by one)
+        # (few rays, or a compiled batch, whose starts cost the same in any number: one halving
+        # at a time, as many simulations as one by one)
         levels = max(1, min(left, _LEVELS, int(np.log2(_BISECT / open_.size + 1))))
-        if 3 * open_.size < SMALL:
+        if 3 * open_.size < small(model) or small(model) == 1:
             levels = 1
         tree = midpoints(low[open_], high[open_], levels)  # rays × (2**levels − 1), in order
         fate = converges(np.repeat(open_, tree.shape[1]), tree.ravel()).reshape(tree.shape)

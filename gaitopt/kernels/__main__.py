@@ -1,7 +1,7 @@
 """``python -m gaitopt.kernels --warm [--jobs N] [MODEL ...]``: compile (or find in the cache) the
 shooting kernels (and their RK steps without derivatives), the verification's DOP853 steps, the
-compiled simulation's arc libraries, the batch simulation's functions and, for a model with
-inputs, the optimiser's node kernels and flow Jacobians
+compiled simulation's arc libraries, the batch simulation's driver and functions and, for a model
+with inputs, the optimiser's node kernels and flow Jacobians
 (:func:`gaitopt.optimize.collocation.warm_kernels`) of the built-in models, so that no later call
 waits for the compiler.  ``--jobs`` compiles that many models at once (default: the number of
 CPUs); the cache is safe for concurrent compiles."""
@@ -38,6 +38,9 @@ def _warm(name: str) -> tuple[str, str, float, float]:
     from .arcs import arc_library
 
     arc_library(REGISTRY[name])  # the compiled simulation's arcs
+    from .batch_driver import batch_library
+
+    batch_library()  # the compiled batch's driver (one library for every model)
     from ..simulation.batch_events import compiled_functions
 
     compiled_functions(REGISTRY[name])  # the batch simulation's guards, resets, locators

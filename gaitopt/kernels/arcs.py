@@ -215,6 +215,13 @@ class ArcLibrary:
 
         return evaluate
 
+    def addresses(self, name: str) -> tuple[int, int] | None:
+        """The ``(function, work)`` addresses of the library's function ``name`` (a reset
+        ``reset_<phase>_<transition>``, ``excursion_<phase>``, ``start_<phase>``), or None where
+        the library has no such function."""
+        found = self._functions.get(name)
+        return None if found is None else found[:2]
+
     def pointers(self, phase: int, constraints: bool) -> ctypes.Array:
         """The ``(function, work)`` pointers of phase ``phase``'s step, events, admissibility,
         flow and excursion (with or without the unilateral constraints among the events)."""

@@ -31,7 +31,7 @@ import numpy as np
 from ..errors import GaitoptInputError
 from .batch_phase import STATUS, BatchPhases
 
-__all__ = ["simulate_batch", "BatchSimulation", "STATUS"]
+__all__ = ["simulate_batch", "BatchSimulation", "STATUS", "compiled_batch"]
 
 
 @dataclass
@@ -143,6 +143,7 @@ def simulate_batch(
     max_phase_time: float = 30.0,
     constraints: bool = True,
     record_events: bool = False,
+    backend: str = "auto",
 ) -> BatchSimulation:
     """Simulate many starts of a hybrid model together, each for ``steps`` returns to the
     section (the algorithm of :func:`gaitopt.simulate`, batched).
@@ -166,6 +167,14 @@ def simulate_batch(
         As in :func:`gaitopt.simulate`.
     record_events : bool
         Keep every event (times, phases, states) in :attr:`BatchSimulation.events`.
+    backend : str
+        ``"compiled"``: every start run to its end in one compiled call
+        (:mod:`gaitopt.simulation.batch_compiled`: the arcs of :func:`gaitopt.simulate`'s compiled
+        backend, step for step, with the hybrid loop around them in C); ``"numpy"``: the starts
+        stepped together from NumPy, one mapped call of the compiled step per step try
+        (:mod:`gaitopt.simulation.batch_phase`); ``"auto"`` (default): compiled where the model
+        class has a compiled arc library (a C compiler present, ``GAITOPT_COMPILE`` not 0), else
+        NumPy.  Both give the events of :func:`gaitopt.simulate` (the tests: 1e-10).
 
     Returns
     -------
@@ -204,14 +213,58 @@ def simulate_batch(
             f"`inputs` must be {n_u} finite values ({', '.join(model.inputs) or 'none'}) or one "
             f"row of them per start, got shape {np.shape(inputs)}"
         )
-    run = BatchPhases(model, np.ascontiguousarray(u, dtype=float), rtol, atol, max_phase_time,
-                      constraints, record_events)  # fmt: skip
-    run.start(rows, full_state, steps)
-    run.loop()
-    out = run.result()
+    library = _compiled(model, backend)
+    if library is not None:
+        from .batch_compiled import run_compiled
+
+        out = run_compiled(library[0], model, library[1], rows, u, full_state, steps, rtol, atol,
+                           max_phase_time, constraints, record_events)  # fmt: skip
+    else:
+        run = BatchPhases(model, np.ascontiguousarray(u, dtype=float), rtol, atol,
+                          max_phase_time, constraints, record_events)  # fmt: skip
+        run.start(rows, full_state, steps)
+        run.loop()
+        out = run.result()
     return BatchSimulation(
         model=model,
         **out,
         elapsed=time.perf_counter() - started,
-        settings={"steps": steps, "rtol": rtol, "atol": atol, "max_phase_time": max_phase_time},
+        settings={
+            "steps": steps,
+            "rtol": rtol,
+            "atol": atol,
+            "max_phase_time": max_phase_time,
+            "backend": "compiled" if library is not None else "numpy",
+        },  # fmt: skip
     )
+
+
+_BACKENDS = ("auto", "compiled", "numpy")
+
+
+def compiled_batch(model: Any) -> bool:
+    """Whether :func:`simulate_batch` runs ``model``'s starts compiled (``backend="auto"``): then
+    a start costs the same in a batch of one as in a batch of thousands."""
+    return _compiled(model, "auto") is not None
+
+
+def _compiled(model: Any, backend: str):
+    """``(gaitopt_batch, the model class's arc library)`` where ``backend`` asks for the compiled
+    batch and it is there, else None (the NumPy batch)."""
+    if backend not in _BACKENDS:
+        raise GaitoptInputError(f"`backend` must be one of {', '.join(_BACKENDS)}, got {backend!r}")
+    if backend == "numpy":
+        return None
+    from ..kernels.arcs import arc_library
+    from ..kernels.batch_driver import batch_library
+
+    run = batch_library()
+    library = arc_library(type(model)) if run is not None else None
+    if library is None:
+        if backend == "compiled":
+            raise GaitoptInputError(
+                f"`backend` 'compiled': no compiled batch for {model.name} (no C compiler: "
+                f"$GAITOPT_CC, default gcc, or GAITOPT_COMPILE=0); use backend='auto' or 'numpy'"
+            )
+        return None
+    return run, library
