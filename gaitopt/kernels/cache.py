@@ -30,6 +30,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import time
 from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
@@ -67,15 +68,73 @@ def _key(source: str, cc: str) -> str:
     return hashlib.sha256(ident.encode()).hexdigest()[:24]
 
 
+def _package_files(root: Path) -> list[tuple[tuple[str, ...], os.stat_result]]:
+    """Every ``.py`` file under ``root`` (its path parts relative to ``root``, in the order of
+    ``sorted(root.rglob("*.py"))``) with its ``stat``."""
+    found: list[tuple[tuple[str, ...], os.stat_result]] = []
+    pending = [((), str(root))]
+    while pending:
+        parts, directory = pending.pop()
+        with os.scandir(directory) as entries:
+            for entry in entries:
+                if entry.is_dir(follow_symlinks=False):
+                    pending.append(((*parts, entry.name), entry.path))
+                elif entry.name.endswith(".py") and entry.is_file():
+                    found.append(((*parts, entry.name), entry.stat()))
+    return sorted(found, key=lambda item: item[0])
+
+
+#: Seconds a source file must be older than a remembered digest: a file changed again within a
+#: timestamp's granularity (1–2 s on some file systems) could keep its size and times.
+_SETTLED_S = 3
+
+
 @lru_cache(maxsize=1)
 def _package_digest() -> str:
-    """SHA-256 of every ``.py`` file of the installed gaitopt package (paths and contents)."""
+    """SHA-256 of every ``.py`` file of the installed gaitopt package (paths and contents).
+
+    Reading and hashing the 2 MB of sources takes 10–20 ms, so the digest is remembered in the
+    cache directory (``sources/``) under a *stamp*: a hash of each file's path, size,
+    modification and status-change times (ns), inode and device.  Any write to a file changes
+    its status-change time (which no program can set back), so a changed source never finds the
+    stamp of its old content; a digest is remembered only when every file is older than
+    ``_SETTLED_S`` seconds, so that coarse timestamps cannot hide a second quick change.
+    """
     root = Path(__file__).resolve().parents[1]
+    files = _package_files(root)
+    stamp = hashlib.sha256(str(root).encode())
+    for parts, st in files:
+        fields = (st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino, st.st_dev)
+        stamp.update(f"{'/'.join(parts)}\0{fields}\n".encode())
+    memo = cache_dir() / "sources" / stamp.hexdigest()[:32]
+    try:
+        known = memo.read_text().strip()
+        if len(known) == 64 and int(known, 16) >= 0:
+            return known
+    except (OSError, ValueError):
+        pass
     digest = hashlib.sha256()
-    for path in sorted(root.rglob("*.py")):
-        digest.update(str(path.relative_to(root)).encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()
+    for parts, _ in files:
+        digest.update("/".join(parts).encode())
+        digest.update(root.joinpath(*parts).read_bytes())
+    value = digest.hexdigest()
+    newest = max((max(st.st_mtime_ns, st.st_ctime_ns) for _, st in files), default=0)
+    if newest < time.time_ns() - _SETTLED_S * 10**9:
+        _write_atomic(memo, value)
+    return value
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file and a rename (a reader sees the whole
+    file or none); nothing where the directory is not writable."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}_", dir=path.parent)
+        with os.fdopen(fd, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except OSError:
+        pass
 
 
 def source_key(name: str, model_cls: type) -> str | None:
