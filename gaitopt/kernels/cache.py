@@ -34,10 +34,11 @@ import time
 from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import casadi as ca
 
-__all__ = ["cache_dir", "compiler", "load", "source_key", "FLAGS"]
+__all__ = ["cache_dir", "compiler", "load", "remembered", "source_key", "FLAGS"]
 
 #: Compiler flags: -O1 compiles the step kernels in seconds and runs them within ~10 % of -O3.
 FLAGS = ("-O1", "-shared", "-fPIC")
@@ -124,14 +125,14 @@ def _package_digest() -> str:
     return value
 
 
-def _write_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename (a reader sees the whole
+def _write_atomic(path: Path, data: str | bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file and a rename (a reader sees the whole
     file or none); nothing where the directory is not writable."""
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}_", dir=path.parent)
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
+        with os.fdopen(fd, "wb" if isinstance(data, bytes) else "w") as fh:
+            fh.write(data)
         os.replace(tmp, path)
     except OSError:
         pass
@@ -149,6 +150,38 @@ def source_key(name: str, model_cls: type) -> str | None:
          cc, str(stat.st_size), str(stat.st_mtime_ns), " ".join(FLAGS)]
     )  # fmt: skip
     return hashlib.sha256(ident.encode()).hexdigest()[:24]
+
+
+def remembered(name: str, model_cls: type, build: Callable[[], Any]) -> Any:
+    """``build()`` for a model class, kept pickled in the cache directory (``objects/``) under
+    the class's :func:`source_key` and the Python version, and unpickled from there later.
+
+    For what costs more to build than to unpickle: a model class's symbolic structure (its
+    CasADi functions, serialised exactly: the same graphs, so the same generated code and the
+    same numbers).  Built every time where the key is None (a model defined outside gaitopt, or
+    no compiler) or the value cannot be pickled; a file that does not unpickle is rebuilt and
+    replaced.
+    """
+    key = source_key(f"{name}_py{sys.version_info[0]}{sys.version_info[1]}", model_cls)
+    if key is None:
+        return build()
+    import pickle
+
+    path = cache_dir() / "objects" / f"{name}_{model_cls.__name__.lower()}_{key}.pickle"
+    try:
+        with open(path, "rb") as fh:
+            return pickle.load(fh)
+    except FileNotFoundError:
+        pass
+    except Exception:  # noqa: BLE001  (a damaged or foreign file: any unpickling error)
+        pass
+    value = build()
+    try:
+        data = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception:  # noqa: BLE001  (e.g. a lambda inside: kept in this process only)
+        return value
+    _write_atomic(path, data)
+    return value
 
 
 def _from_index(key: str) -> list[ca.Function] | None:
