@@ -171,7 +171,8 @@ class _Version(argparse.Action):
     def __call__(self, parser, namespace, values, option_string=None) -> None:
         from .. import __version__
 
-        parser.exit(message=f"{PROG} {__version__}\n")
+        parser._print_message(f"{PROG} {__version__}\n", sys.stdout)  # as argparse's "version"
+        parser.exit()
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:

@@ -22,14 +22,9 @@ The first use of a model class says on stderr that it is compiling (a few second
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
-import shutil
-import signal
-import subprocess
 import sys
-import tempfile
 import time
 from collections.abc import Callable
 from functools import lru_cache
@@ -37,6 +32,11 @@ from pathlib import Path
 from typing import Any
 
 import casadi as ca
+
+try:  # CPython's own SHA-256: no OpenSSL library to load at start (the same digests)
+    from _sha256 import sha256
+except ImportError:  # another Python: hashlib's
+    from hashlib import sha256
 
 __all__ = ["cache_dir", "compiler", "load", "remembered", "source_key", "FLAGS"]
 
@@ -58,7 +58,37 @@ def compiler() -> str | None:
     """The C compiler's resolved path, or None when there is none (or compiling is off)."""
     if os.environ.get("GAITOPT_COMPILE", "1") == "0":
         return None
-    return shutil.which(os.environ.get("GAITOPT_CC", "gcc"))
+    return _which(os.environ.get("GAITOPT_CC", "gcc"))
+
+
+def _which(command: str) -> str | None:
+    """:func:`shutil.which` (importing :mod:`shutil` costs a start 3–4 ms: it loads the
+    compression modules); on POSIX the same search written out: ``command`` itself if it names
+    a directory, else the first executable file ``PATH``'s folders hold under that name."""
+    if os.name != "posix":
+        import shutil
+
+        return shutil.which(command)
+
+    def executable(path: str) -> bool:
+        return os.path.exists(path) and os.access(path, os.X_OK) and not os.path.isdir(path)
+
+    if os.path.dirname(command):
+        return command if executable(command) else None
+    path = os.environ.get("PATH")
+    if path is None:
+        try:
+            path = os.confstr("CS_PATH")
+        except (AttributeError, ValueError):
+            path = os.defpath
+    seen = set()
+    for directory in path.split(os.pathsep):
+        if directory not in seen:
+            seen.add(directory)
+            candidate = os.path.join(directory, command)
+            if executable(candidate):
+                return candidate
+    return None
 
 
 def _key(source: str, cc: str) -> str:
@@ -66,7 +96,7 @@ def _key(source: str, cc: str) -> str:
     ident = "\n".join(
         [source, ca.__version__, cc, str(stat.st_size), str(stat.st_mtime_ns), " ".join(FLAGS)]
     )
-    return hashlib.sha256(ident.encode()).hexdigest()[:24]
+    return sha256(ident.encode()).hexdigest()[:24]
 
 
 def _package_files(root: Path) -> list[tuple[tuple[str, ...], os.stat_result]]:
@@ -103,7 +133,7 @@ def _package_digest() -> str:
     """
     root = Path(__file__).resolve().parents[1]
     files = _package_files(root)
-    stamp = hashlib.sha256(str(root).encode())
+    stamp = sha256(str(root).encode())
     for parts, st in files:
         fields = (st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino, st.st_dev)
         stamp.update(f"{'/'.join(parts)}\0{fields}\n".encode())
@@ -114,7 +144,7 @@ def _package_digest() -> str:
             return known
     except (OSError, ValueError):
         pass
-    digest = hashlib.sha256()
+    digest = sha256()
     for parts, _ in files:
         digest.update("/".join(parts).encode())
         digest.update(root.joinpath(*parts).read_bytes())
@@ -128,6 +158,8 @@ def _package_digest() -> str:
 def _write_atomic(path: Path, data: str | bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file and a rename (a reader sees the whole
     file or none); nothing where the directory is not writable."""
+    import tempfile  # here: a warm start writes nothing
+
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=f".{path.name}_", dir=path.parent)
@@ -149,7 +181,7 @@ def source_key(name: str, model_cls: type) -> str | None:
         [name, model_cls.__module__, model_cls.__qualname__, _package_digest(), ca.__version__,
          cc, str(stat.st_size), str(stat.st_mtime_ns), " ".join(FLAGS)]
     )  # fmt: skip
-    return hashlib.sha256(ident.encode()).hexdigest()[:24]
+    return sha256(ident.encode()).hexdigest()[:24]
 
 
 def remembered(name: str, model_cls: type, build: Callable[[], Any]) -> Any:
@@ -197,6 +229,8 @@ def _from_index(key: str) -> list[ca.Function] | None:
 
 
 def _write_index(key: str, library: Path, names: list[str]) -> None:
+    import tempfile  # here: a warm start writes nothing
+
     directory = cache_dir() / "index"
     try:
         directory.mkdir(parents=True, exist_ok=True)
@@ -239,6 +273,8 @@ def load(
     directory = cache_dir()
     library = directory / f"{name}_{_key(source, cc)}.so"
     if not library.exists():
+        import subprocess  # here: a warm start compiles nothing
+
         try:
             _compile(source, cc, library, name, verbose)
         except (OSError, subprocess.SubprocessError) as exc:
@@ -259,6 +295,10 @@ def load(
 
 
 def _compile(source: str, cc: str, library: Path, name: str, verbose: bool) -> None:
+    import signal
+    import subprocess
+    import tempfile
+
     library.parent.mkdir(parents=True, exist_ok=True)
     if verbose:
         print(f"gaitopt: compiling the {name} kernels (once; cached in {library.parent})",
