@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import sys
 import time
 from collections.abc import Callable
@@ -58,37 +59,7 @@ def compiler() -> str | None:
     """The C compiler's resolved path, or None when there is none (or compiling is off)."""
     if os.environ.get("GAITOPT_COMPILE", "1") == "0":
         return None
-    return _which(os.environ.get("GAITOPT_CC", "gcc"))
-
-
-def _which(command: str) -> str | None:
-    """:func:`shutil.which` (importing :mod:`shutil` costs a start 3–4 ms: it loads the
-    compression modules); on POSIX the same search written out: ``command`` itself if it names
-    a directory, else the first executable file ``PATH``'s folders hold under that name."""
-    if os.name != "posix":
-        import shutil
-
-        return shutil.which(command)
-
-    def executable(path: str) -> bool:
-        return os.path.exists(path) and os.access(path, os.X_OK) and not os.path.isdir(path)
-
-    if os.path.dirname(command):
-        return command if executable(command) else None
-    path = os.environ.get("PATH")
-    if path is None:
-        try:
-            path = os.confstr("CS_PATH")
-        except (AttributeError, ValueError):
-            path = os.defpath
-    seen = set()
-    for directory in path.split(os.pathsep):
-        if directory not in seen:
-            seen.add(directory)
-            candidate = os.path.join(directory, command)
-            if executable(candidate):
-                return candidate
-    return None
+    return shutil.which(os.environ.get("GAITOPT_CC", "gcc"))
 
 
 def _key(source: str, cc: str) -> str:
@@ -117,21 +88,29 @@ def _package_files(root: Path) -> list[tuple[tuple[str, ...], os.stat_result]]:
 
 #: Seconds a source file must be older than a remembered digest: a file changed again within a
 #: timestamp's granularity (1–2 s on some file systems) could keep its size and times.
-_SETTLED_S = 3
+_SETTLED_S = 3.0
 
 
 @lru_cache(maxsize=1)
 def _package_digest() -> str:
-    """SHA-256 of every ``.py`` file of the installed gaitopt package (paths and contents).
+    """SHA-256 of every ``.py`` file of the installed gaitopt package (paths and contents), by
+    :func:`tree_digest` (once per process)."""
+    return tree_digest(Path(__file__).resolve().parents[1])
 
-    Reading and hashing the 2 MB of sources takes 10–20 ms, so the digest is remembered in the
-    cache directory (``sources/``) under a *stamp*: a hash of each file's path, size,
-    modification and status-change times (ns), inode and device.  Any write to a file changes
-    its status-change time (which no program can set back), so a changed source never finds the
-    stamp of its old content; a digest is remembered only when every file is older than
-    ``_SETTLED_S`` seconds, so that coarse timestamps cannot hide a second quick change.
+
+def tree_digest(root: Path) -> str:
+    """SHA-256 of every ``.py`` file under ``root``: each file's path relative to ``root``, then
+    its bytes, in sorted order.
+
+    Reading and hashing gaitopt's 2 MB of sources takes 10–20 ms, so the digest is remembered in
+    the cache directory (``sources/``) under a *stamp*: a hash of ``root`` and of each file's
+    path, size, modification and status-change times (ns), inode and device.  Any write to a
+    file changes its status-change time (which no program can set back), so a changed source
+    never finds the stamp of its old content; a digest is remembered only when every file is
+    older than ``_SETTLED_S`` seconds, so that coarse timestamps cannot hide a second quick
+    change.
     """
-    root = Path(__file__).resolve().parents[1]
+    root = Path(root)
     files = _package_files(root)
     stamp = sha256(str(root).encode())
     for parts, st in files:
@@ -150,7 +129,7 @@ def _package_digest() -> str:
         digest.update(root.joinpath(*parts).read_bytes())
     value = digest.hexdigest()
     newest = max((max(st.st_mtime_ns, st.st_ctime_ns) for _, st in files), default=0)
-    if newest < time.time_ns() - _SETTLED_S * 10**9:
+    if newest < time.time_ns() - _SETTLED_S * 1e9:
         _write_atomic(memo, value)
     return value
 
