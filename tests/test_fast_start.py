@@ -178,3 +178,19 @@ def test_the_command_starts_blas_with_one_thread_and_imports_no_extras():
     assert early is False and status == 0 and threads == [1]
     never = ("threadpoolctl", "importlib.metadata", "subprocess", "tempfile", "uuid")
     assert [m for m in never if m in loaded] == []
+
+
+def test_bench_process_fast_mode(tmp_path, monkeypatch):
+    """``python -m bench.process`` (one round, no Drake): the command exits 0, the five stages
+    are timed, and the second solve inside repeats the first's fixed point."""
+    monkeypatch.syspath_prepend(str(ROOT.parent))
+    from bench import process
+
+    out = tmp_path / "bench_process.json"
+    assert process.main(["--repeats", "1", "--no-peers", "--out", str(out)]) == 0
+    record = json.loads(out.read_text())
+    assert record["processes"]["gaitopt"]["exit_codes"] == [0]
+    assert record["processes"]["drake"] == {"skipped": "off"}
+    stages = [v["cpu_median_s"] for k, v in record["stages"].items() if k != "load_1min"]
+    assert len(stages) == 5 and all(s > 0 for s in stages)
+    assert record["inside"]["same"] is True and record["modules"] > 10
