@@ -6,8 +6,9 @@ its time on (issue 23 item 3: a fast start).
   gaitopt"``, the command (as its console script runs it) and, where ``pydrake`` imports, Drake's
   process (:data:`bench.speed._DRAKE_PROCESS`: ``CompassGait`` from the same start until
   consecutive post-impact states agree to 1e-8).  Alternating them puts the machine's load on
-  every command alike.  Median wall and CPU (user + system) times; the goal is the command's
-  wall time ≤ 0.5× Drake's.
+  every command alike; and the hand-written SciPy baseline's process (:mod:`bench.goals`: events
+  + ``fsolve`` from the same start), the comparison where Drake cannot be installed.  Median
+  wall and CPU (user + system) times; the goal is the command's wall time ≤ 0.5× Drake's.
 * **stages** — the command's CPU time taken apart by processes that stop earlier, each the
   median of ``repeats``: the interpreter (``pass``), NumPy (with one BLAS thread, as the command
   starts it), CasADi, gaitopt's modules of the solve path (the list a run of the command
@@ -110,10 +111,23 @@ def _drake_code() -> str | None:
     return _DRAKE_PROCESS.format(params=dict(model.params), x0=x0, tol=_SETTLE)
 
 
+def _baseline_code() -> str:
+    """The hand-written SciPy baseline's process as :mod:`bench.goals` times it."""
+    import gaitopt
+
+    from .goals import _BASELINE_PROCESS
+
+    model = gaitopt.model("compass_gait")
+    start = [float(v) for v in model.section_vector({})]
+    return _BASELINE_PROCESS.format(params=dict(model.params), start=start)
+
+
 def _alternating(commands: dict[str, list[str]], repeats: int) -> dict[str, Any]:
     """Wall and CPU times of each command, the commands run in turn ``repeats`` rounds (after
     one round that is not counted); the 1-minute load average after each round."""
-    env = {**os.environ, "MPLBACKEND": "Agg"}
+    root = str(Path(__file__).resolve().parents[1])  # this checkout's gaitopt and bench
+    path = os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH", "")) if p)
+    env = {**os.environ, "MPLBACKEND": "Agg", "PYTHONPATH": path}
     runs: dict[str, dict[str, list]] = {k: {"wall": [], "cpu": [], "codes": []} for k in commands}
     loads = []
     for i in range(repeats + 1):
@@ -152,6 +166,7 @@ def run(repeats: int = 7, drake: bool = True) -> dict[str, Any]:
     code = _drake_code() if drake else None
     if code is not None:
         commands["drake"] = [python, "-c", code]
+    commands["baseline"] = [python, "-c", _baseline_code()]
     record: dict[str, Any] = {
         "machine": _machine(),
         "repeats": repeats,
@@ -185,6 +200,9 @@ def run(repeats: int = 7, drake: bool = True) -> dict[str, Any]:
         record["ratio_wall"] = g["median_s"] / d["median_s"]
         record["ratio_cpu"] = g["cpu_median_s"] / d["cpu_median_s"]
         record["met"] = record["ratio_wall"] <= 0.5
+    g, b = processes["gaitopt"], processes["baseline"]
+    record["ratio_baseline_wall"] = g["median_s"] / b["median_s"]
+    record["ratio_baseline_cpu"] = g["cpu_median_s"] / b["cpu_median_s"]
     return record
 
 
@@ -197,7 +215,7 @@ def table(record: dict[str, Any]) -> str:
     p = record["processes"]
     lo, hi = p["load_1min"]
     lines = [f"whole processes ({record['repeats']} rounds, alternating; load {lo:.1f}–{hi:.1f})"]
-    for name in ("python_startup", "import_gaitopt", "gaitopt", "drake"):
+    for name in ("python_startup", "import_gaitopt", "gaitopt", "drake", "baseline"):
         r = p.get(name, {})
         if "median_s" in r:
             lines.append(
@@ -212,6 +230,10 @@ def table(record: dict[str, Any]) -> str:
             f"  gaitopt / Drake: {record['ratio_wall']:.2f}× wall, {record['ratio_cpu']:.2f}× CPU "
             f"(goal ≤ 0.5× wall: {verdict})"
         )
+    lines.append(
+        f"  gaitopt / the hand-written baseline: {record['ratio_baseline_wall']:.2f}× wall, "
+        f"{record['ratio_baseline_cpu']:.2f}× CPU"
+    )
     s = record["stages"]
     lines.append(f"stages (CPU, median; load {s['load_1min'][0]:.1f}–{s['load_1min'][1]:.1f})")
     previous = 0.0

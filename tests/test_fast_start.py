@@ -190,6 +190,7 @@ def test_bench_process_fast_mode(tmp_path, monkeypatch):
     assert process.main(["--repeats", "1", "--no-peers", "--out", str(out)]) == 0
     record = json.loads(out.read_text())
     assert record["processes"]["gaitopt"]["exit_codes"] == [0]
+    assert record["processes"]["baseline"]["exit_codes"] == [0]
     assert record["processes"]["drake"] == {"skipped": "off"}
     stages = [v["cpu_median_s"] for k, v in record["stages"].items() if k != "load_1min"]
     assert len(stages) == 5 and all(s > 0 for s in stages)

@@ -13,7 +13,10 @@ key*: a hash of gaitopt's own source files, the model class's module, the CasADi
 compiler and the flags, which determine the generated code as well.  A warm start looks the
 library up there and builds nothing.  Only model classes defined inside the ``gaitopt`` package
 use the index (a model defined elsewhere may depend on code the key does not see); an index entry
-whose library is missing or does not load is ignored and rewritten.
+whose library is missing or does not load is ignored and rewritten.  The sources' digest is
+remembered under a stamp of the files' sizes and times (:func:`tree_digest`), and what costs more
+to build than to unpickle — a model class's symbolic structure — is kept pickled under the same
+key (:func:`remembered`), so a warm start reads no source and builds no graph.
 
 The compiler is ``$GAITOPT_CC`` (default ``gcc``).  Without one (or where compiling fails, or with
 ``GAITOPT_COMPILE=0``) the same functions run in CasADi's interpreter: slower, identical results.
