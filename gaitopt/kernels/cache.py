@@ -185,14 +185,12 @@ def remembered(name: str, model_cls: type, build: Callable[[], Any]) -> Any:
     try:
         with open(path, "rb") as fh:
             return pickle.load(fh)
-    except FileNotFoundError:
-        pass
-    except Exception:  # noqa: BLE001  (a damaged or foreign file: any unpickling error)
+    except Exception:  # none yet, or a damaged or foreign file (any unpickling error)
         pass
     value = build()
     try:
         data = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
-    except Exception:  # noqa: BLE001  (e.g. a lambda inside: kept in this process only)
+    except Exception:  # e.g. a lambda inside: kept in this process only
         return value
     _write_atomic(path, data)
     return value
