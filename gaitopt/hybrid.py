@@ -237,7 +237,7 @@ class HybridModel:
 
         A built-in model's structure is also kept pickled in the kernel cache under its source
         key (:func:`gaitopt.kernels.cache.remembered`): a later process unpickles it (the same
-        CasADi graphs) instead of building it, 3–5× faster."""
+        CasADi graphs) instead of building it, several times faster."""
         if cls not in HybridModel._cache:
             from .kernels.cache import remembered
 

@@ -15,12 +15,12 @@ the same process keep their threads.  Parallel work in gaitopt comes from proces
 workers), never from BLAS threads.  ``GAITOPT_BLAS_THREADS=N`` sets another count, ``0`` leaves
 BLAS alone.  Limits come from threadpoolctl (the library scikit-learn uses for the same purpose).
 
-The ``gaitopt`` command is a process of its own: :func:`start_with_blas_threads` (called where
-:mod:`gaitopt.cli` is imported, before NumPy) sets ``OPENBLAS_NUM_THREADS`` (and MKL's and BLIS's
-variables) to that count, so the BLAS libraries start with it when they load — no thread pool is
-started, and the entry points have nothing left to limit (threadpoolctl's scan of the loaded
-libraries, about 10 ms, is skipped).  It does nothing where NumPy is already imported or the user
-has set any of those variables.
+The ``gaitopt`` command is a process of its own: :func:`start_with_blas_threads` (called first
+in :func:`gaitopt.cli.main`, whose module imports no NumPy) sets ``OPENBLAS_NUM_THREADS`` (and
+MKL's and BLIS's variables) to that count, so the BLAS libraries start with it when they load:
+no thread pool is started, and the entry points have nothing left to limit (threadpoolctl's scan
+of the loaded libraries, about 10 ms, is skipped).  It does nothing where NumPy is already
+imported or the user has set any of those variables.
 """
 
 from __future__ import annotations
