@@ -41,6 +41,7 @@ studies-check: $(STAMP)
 
 bench: $(STAMP)
 	-$(BIN)/python -m pip install --quiet -e '.[peers]' || echo "Drake not installable here: benchmarking without peers"
+	$(BIN)/python -m compileall -q gaitopt  # the sources may have changed since install: timed processes compile none
 	MPLBACKEND=Agg $(BIN)/python -m bench --out results/bench.json
 
 lint: $(STAMP)

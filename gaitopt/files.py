@@ -16,11 +16,8 @@ import contextlib
 import json
 import math
 import os
-import shutil
 import signal
-import tempfile
 import threading
-import uuid
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -39,6 +36,12 @@ __all__ = [
     "check_output_folder",
     "write_or_fall_back",
 ]
+
+
+def _token() -> str:
+    """12 random hex digits naming a temporary sibling (as ``uuid.uuid4().hex[:12]``, without
+    importing :mod:`uuid`)."""
+    return os.urandom(6).hex()
 
 
 @contextlib.contextmanager
@@ -70,7 +73,7 @@ def replaced_atomically(path: str | os.PathLike, suffix: str = ".tmp") -> Iterat
     ...     fig.savefig(tmp, format="png")
     """
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:12]}{suffix}")
+    tmp = path.with_name(f".{path.name}.{_token()}{suffix}")
     try:
         yield tmp
         os.replace(tmp, path)
@@ -115,13 +118,15 @@ def _signals_deferred() -> Iterator[None]:
 
 def _hidden_sibling(folder: Path, kind: str) -> Path:
     """``.NAME.<random>.<kind>`` beside ``folder`` (same directory: renames stay atomic)."""
-    return folder.with_name(f".{folder.name}.{uuid.uuid4().hex[:12]}.{kind}")
+    return folder.with_name(f".{folder.name}.{_token()}.{kind}")
 
 
 def _carry_over(old: Path, new: Path, replaces: Iterable[str]) -> None:
     """Put into ``new`` every entry of ``old`` whose name is not in ``replaces`` and that ``new``
     does not have: as hard links (a copy where the file system has none), so ``old`` stays
     whole until it is swapped out."""
+    import shutil  # here: the CLI's JSON output needs none of it
+
     replaced = set(replaces)
     for entry in old.iterdir():
         target = new / entry.name
@@ -135,6 +140,8 @@ def _carry_over(old: Path, new: Path, replaces: Iterable[str]) -> None:
 
 def _link_or_copy(src: str | os.PathLike, dst: str | os.PathLike, **kwargs: Any) -> None:
     """A hard link ``dst`` to ``src``, or a copy with its metadata where links fail."""
+    import shutil  # here: the CLI's JSON output needs none of it
+
     try:
         if os.path.islink(src):
             os.symlink(os.readlink(src), dst)
@@ -147,6 +154,8 @@ def _link_or_copy(src: str | os.PathLike, dst: str | os.PathLike, **kwargs: Any)
 def _move_into(stage: Path, folder: Path) -> None:
     """Move every entry of ``stage`` into the existing ``folder`` (replacing entries of the same
     name); ``folder`` says it is incomplete (:data:`INCOMPLETE`) until the last one is in."""
+    import shutil  # here: the CLI's JSON output needs none of it
+
     marker = folder / INCOMPLETE
     marker.write_text(
         "gaitopt stopped while it moved its results into this folder: some files here may be\n"
@@ -221,9 +230,11 @@ def folder_written_whole(
     ...     write_json(data, stage / "branch.json")
     ...     save_figure(fig, stage / "branch.png")
     """
+    import shutil  # here: the CLI's JSON output needs none of it
+
     folder = Path(os.path.abspath(folder))
     if replaces is None and folder.is_dir():  # a user's folder: stage inside it, move in
-        stage = folder / f".gaitopt.{uuid.uuid4().hex[:12]}.partial"
+        stage = folder / f".gaitopt.{_token()}.partial"
     else:
         folder.parent.mkdir(parents=True, exist_ok=True)
         stage = _hidden_sibling(folder, "partial")
@@ -421,6 +432,8 @@ def write_or_fall_back(
     OSError
         If neither ``folder`` nor a fallback directory can be written.
     """
+    import tempfile  # here: the CLI's JSON output needs none of it
+
     try:
         with folder_written_whole(folder) as stage:
             write(stage)
@@ -428,7 +441,7 @@ def write_or_fall_back(
     except OSError as exc:
         error = exc
     for base in (tempfile.gettempdir(), os.getcwd()):
-        fallback = Path(base) / f"{prefix}{uuid.uuid4().hex[:12]}"
+        fallback = Path(base) / f"{prefix}{_token()}"
         try:
             with folder_written_whole(fallback) as stage:
                 write(stage)

@@ -233,14 +233,25 @@ class HybridModel:
     @classmethod
     def structure(cls) -> Structure:
         """The class's phases and section (``.phases``, ``.section``), built once per class from
-        symbolic parameters by :meth:`build`, validated and cached; no model instance needed."""
+        symbolic parameters by :meth:`build`, validated and cached; no model instance needed.
+
+        A built-in model's structure is also kept pickled in the kernel cache under its source
+        key (:func:`gaitopt.kernels.cache.remembered`): a later process unpickles it (the same
+        CasADi graphs) instead of building it, several times faster."""
         if cls not in HybridModel._cache:
-            sym = Symbols(cls.parameter_specs(), cls.inputs)
-            phases, section = cls.build(sym)
-            validate_structure(cls, tuple(phases), section)
-            check_declared(cls, tuple(phases), section)
-            HybridModel._cache[cls] = Structure(tuple(phases), section)
+            from .kernels.cache import remembered
+
+            HybridModel._cache[cls] = remembered("structure", cls, cls._build_structure)
         return HybridModel._cache[cls]
+
+    @classmethod
+    def _build_structure(cls) -> Structure:
+        """:meth:`build` on symbolic parameters, validated."""
+        sym = Symbols(cls.parameter_specs(), cls.inputs)
+        phases, section = cls.build(sym)
+        validate_structure(cls, tuple(phases), section)
+        check_declared(cls, tuple(phases), section)
+        return Structure(tuple(phases), section)
 
     @property
     def phases(self) -> tuple[Phase, ...]:

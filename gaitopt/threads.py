@@ -14,12 +14,20 @@ caller's setting is restored when it returns, so a user's own large matrix produ
 the same process keep their threads.  Parallel work in gaitopt comes from processes (Dask
 workers), never from BLAS threads.  ``GAITOPT_BLAS_THREADS=N`` sets another count, ``0`` leaves
 BLAS alone.  Limits come from threadpoolctl (the library scikit-learn uses for the same purpose).
+
+The ``gaitopt`` command is a process of its own: :func:`start_with_blas_threads` (called first
+in :func:`gaitopt.cli.main`, whose module imports no NumPy) sets ``OPENBLAS_NUM_THREADS`` (and
+MKL's and BLIS's variables) to that count, so the BLAS libraries start with it when they load:
+no thread pool is started, and the entry points have nothing left to limit (threadpoolctl's scan
+of the loaded libraries, about 10 ms, is skipped).  It does nothing where NumPy is already
+imported or the user has set any of those variables.
 """
 
 from __future__ import annotations
 
 import functools
 import os
+import sys
 from collections.abc import Callable
 from typing import Any, TypeVar
 
@@ -28,6 +36,11 @@ __all__ = ["single_blas_thread", "blas_threads"]
 F = TypeVar("F", bound=Callable[..., Any])
 
 _controller = None
+#: The BLAS thread count the process's BLAS libraries were started with by
+#: :func:`start_with_blas_threads`, or None.
+_started_with: int | None = None
+#: The variables BLAS libraries read their thread count from when they load.
+_BLAS_VARIABLES = ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS")
 
 
 def blas_threads() -> int:
@@ -75,6 +88,21 @@ def _limits(threads: int):
     return _controller.limit(limits=threads, user_api="blas")
 
 
+def start_with_blas_threads() -> None:
+    """In a process whose BLAS is not loaded yet (no NumPy imported), have every BLAS library
+    start with :func:`blas_threads` threads (its environment variable, read when it loads) and
+    skip the limits of :func:`single_blas_thread`; nothing where NumPy is imported, the user set
+    one of the variables, or ``GAITOPT_BLAS_THREADS=0``.  Meant for a process gaitopt runs
+    itself (the ``gaitopt`` command): its children inherit the variables."""
+    global _started_with
+    threads = blas_threads()
+    if threads == 0 or "numpy" in sys.modules or any(v in os.environ for v in _BLAS_VARIABLES):
+        return
+    for variable in _BLAS_VARIABLES:
+        os.environ[variable] = str(threads)
+    _started_with = threads
+
+
 def single_blas_thread(function: F) -> F:
     """Decorate an entry point so that it runs with :func:`blas_threads` BLAS threads (nested
     calls cost one cheap re-limit, about 0.2 ms)."""
@@ -82,7 +110,7 @@ def single_blas_thread(function: F) -> F:
     @functools.wraps(function)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         threads = blas_threads()
-        if threads == 0:
+        if threads == 0 or threads == _started_with:
             return function(*args, **kwargs)
         with _limits(threads):
             return function(*args, **kwargs)

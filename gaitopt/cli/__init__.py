@@ -160,6 +160,21 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
+class _Version(argparse.Action):
+    """``--version``: the installed package's version, looked up only when asked for (reading
+    the package metadata imports :mod:`importlib.metadata` and the ``email`` parser, about 30 ms
+    that every other command would pay at start)."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str, **kwargs) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        from .. import __version__
+
+        parser._print_message(f"{PROG} {__version__}\n", sys.stdout)  # as argparse's "version"
+        parser.exit()
+
+
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The ``gaitopt`` argument parser, one subparser per entry of :data:`SUBCOMMANDS`.
 
@@ -169,14 +184,12 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         Declare the arguments of this subcommand only (the others are listed with their help but
         take no arguments), so that only its module is imported; default: every subcommand's.
     """
-    from .. import __version__
-
     parser = _Parser(
         prog=PROG,
         description="Gaits of simple legged-locomotion models as periodic orbits of hybrid "
         "systems. Exit status: 0 found, 1 not found, 2 bad input.",
     )
-    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    parser.add_argument("--version", action=_Version, help="show program's version number and exit")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name, sub_command in SUBCOMMANDS.items():
         sub = commands.add_parser(name, help=sub_command.help, description=sub_command.help)
@@ -223,6 +236,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         ``gaitopt: interrupted`` on stderr, no traceback).
     """
     from ..interrupts import caused_by_interrupt, interrupts_outside_casadi
+    from ..threads import start_with_blas_threads
+
+    start_with_blas_threads()  # before NumPy loads its BLAS (a fresh `gaitopt` process)
 
     try:
         with interrupts_outside_casadi():  # else CasADi may turn Ctrl-C into another error

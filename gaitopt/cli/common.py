@@ -8,8 +8,6 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, NoReturn
 
-import numpy as np
-
 from ..errors import (
     MAX_ORBIT_STEPS,
     GaitoptInputError,
@@ -20,6 +18,8 @@ from ..errors import (
 from ..parameters import ParameterSpec, check_parameter
 
 if TYPE_CHECKING:  # annotations only: `gaitopt list` and `--help` need no CasADi
+    import numpy as np
+
     from ..hybrid import HybridModel
 
 PROG = "gaitopt"
@@ -160,6 +160,8 @@ def _number(
         raise InputError(
             f"{option} {item}: {text!r} is not a number; e.g. {option} {example}"
         ) from None
+    import numpy as np  # here: importing the CLI loads no NumPy (threads.start_with_blas_threads)
+
     if not np.isfinite(value):
         raise InputError(f"{option} {item}: {text!r} is not finite; e.g. {option} {example}")
     return value
@@ -187,8 +189,10 @@ def _model_class(name: str) -> type[HybridModel]:
     """The model class called ``name``: registered, or declared by an installed package's
     entry point (group ``gaitopt.models``, loaded now: :func:`gaitopt.models.model_class`)."""
     from ..errors import UnknownModelError
-    from ..models import model_class, model_names
+    from ..models import REGISTRY, model_class, model_names
 
+    if name in REGISTRY:  # no scan of the installed packages' entry points (importlib.metadata)
+        return model_class(name)
     names = model_names()
     if name not in names:
         raise InputError(

@@ -12,7 +12,6 @@ from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
-from ..files import jsonable
 from .common import PROG
 
 
@@ -49,6 +48,8 @@ def _flush_c_stdio() -> None:
 
 
 def _print_json(value: Any) -> None:
+    from ..files import jsonable  # here: importing the CLI loads no NumPy
+
     print(json.dumps(jsonable(value), indent=2, ensure_ascii=False, allow_nan=False))
 
 

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import ctypes
 import json
-import subprocess
 import sys
 from collections.abc import Callable
 from functools import lru_cache
@@ -131,6 +130,8 @@ def _library_path(model_cls, verbose: bool) -> tuple[Path, Path | None] | None:
     source = gen.dump() + DRIVER
     library = cache_dir() / f"{name}_{_key(source, cc)}.so"
     if not library.exists():
+        import subprocess  # here: a warm start compiles nothing
+
         try:
             _compile(source, cc, library, name, verbose)
         except (OSError, subprocess.SubprocessError) as exc:

@@ -13,7 +13,10 @@ key*: a hash of gaitopt's own source files, the model class's module, the CasADi
 compiler and the flags, which determine the generated code as well.  A warm start looks the
 library up there and builds nothing.  Only model classes defined inside the ``gaitopt`` package
 use the index (a model defined elsewhere may depend on code the key does not see); an index entry
-whose library is missing or does not load is ignored and rewritten.
+whose library is missing or does not load is ignored and rewritten.  The sources' digest is
+remembered under a stamp of the files' sizes and times (:func:`tree_digest`), and what costs more
+to build than to unpickle — a model class's symbolic structure — is kept pickled under the same
+key (:func:`remembered`), so a warm start reads no source and builds no graph.
 
 The compiler is ``$GAITOPT_CC`` (default ``gcc``).  Without one (or where compiling fails, or with
 ``GAITOPT_COMPILE=0``) the same functions run in CasADi's interpreter: slower, identical results.
@@ -22,21 +25,24 @@ The first use of a model class says on stderr that it is compiling (a few second
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import shutil
-import signal
-import subprocess
 import sys
-import tempfile
+import time
 from collections.abc import Callable
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import casadi as ca
 
-__all__ = ["cache_dir", "compiler", "load", "source_key", "FLAGS"]
+try:  # CPython's own SHA-256: no OpenSSL library to load at start (the same digests)
+    from _sha256 import sha256
+except ImportError:  # another Python: hashlib's
+    from hashlib import sha256
+
+__all__ = ["cache_dir", "compiler", "load", "remembered", "source_key", "FLAGS"]
 
 #: Compiler flags: -O1 compiles the step kernels in seconds and runs them within ~10 % of -O3.
 FLAGS = ("-O1", "-shared", "-fPIC")
@@ -64,18 +70,86 @@ def _key(source: str, cc: str) -> str:
     ident = "\n".join(
         [source, ca.__version__, cc, str(stat.st_size), str(stat.st_mtime_ns), " ".join(FLAGS)]
     )
-    return hashlib.sha256(ident.encode()).hexdigest()[:24]
+    return sha256(ident.encode()).hexdigest()[:24]
+
+
+def _package_files(root: Path) -> list[tuple[tuple[str, ...], os.stat_result]]:
+    """Every ``.py`` file under ``root`` (its path parts relative to ``root``, in the order of
+    ``sorted(root.rglob("*.py"))``) with its ``stat``."""
+    found: list[tuple[tuple[str, ...], os.stat_result]] = []
+    pending = [((), str(root))]
+    while pending:
+        parts, directory = pending.pop()
+        with os.scandir(directory) as entries:
+            for entry in entries:
+                if entry.is_dir(follow_symlinks=False):
+                    pending.append(((*parts, entry.name), entry.path))
+                elif entry.name.endswith(".py") and entry.is_file():
+                    found.append(((*parts, entry.name), entry.stat()))
+    return sorted(found, key=lambda item: item[0])
+
+
+#: Seconds a source file must be older than a remembered digest: a file changed again within a
+#: timestamp's granularity (1–2 s on some file systems) could keep its size and times.
+_SETTLED_S = 3.0
 
 
 @lru_cache(maxsize=1)
 def _package_digest() -> str:
-    """SHA-256 of every ``.py`` file of the installed gaitopt package (paths and contents)."""
-    root = Path(__file__).resolve().parents[1]
-    digest = hashlib.sha256()
-    for path in sorted(root.rglob("*.py")):
-        digest.update(str(path.relative_to(root)).encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()
+    """SHA-256 of every ``.py`` file of the installed gaitopt package (paths and contents), by
+    :func:`tree_digest` (once per process)."""
+    return tree_digest(Path(__file__).resolve().parents[1])
+
+
+def tree_digest(root: Path) -> str:
+    """SHA-256 of every ``.py`` file under ``root``: each file's path relative to ``root``, then
+    its bytes, in sorted order.
+
+    Reading and hashing gaitopt's 2 MB of sources takes 10–20 ms, so the digest is remembered in
+    the cache directory (``sources/``) under a *stamp*: a hash of ``root`` and of each file's
+    path, size, modification and status-change times (ns), inode and device.  Any write to a
+    file changes its status-change time (which no program can set back), so a changed source
+    never finds the stamp of its old content; a digest is remembered only when every file is
+    older than ``_SETTLED_S`` seconds, so that coarse timestamps cannot hide a second quick
+    change.
+    """
+    root = Path(root)
+    files = _package_files(root)
+    stamp = sha256(str(root).encode())
+    for parts, st in files:
+        fields = (st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino, st.st_dev)
+        stamp.update(f"{'/'.join(parts)}\0{fields}\n".encode())
+    memo = cache_dir() / "sources" / stamp.hexdigest()[:32]
+    try:
+        known = memo.read_text().strip()
+        if len(known) == 64 and int(known, 16) >= 0:
+            return known
+    except (OSError, ValueError):
+        pass
+    digest = sha256()
+    for parts, _ in files:
+        digest.update("/".join(parts).encode())
+        digest.update(root.joinpath(*parts).read_bytes())
+    value = digest.hexdigest()
+    newest = max((max(st.st_mtime_ns, st.st_ctime_ns) for _, st in files), default=0)
+    if newest < time.time_ns() - _SETTLED_S * 1e9:
+        _write_atomic(memo, value)
+    return value
+
+
+def _write_atomic(path: Path, data: str | bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file and a rename (a reader sees the whole
+    file or none); nothing where the directory is not writable."""
+    import tempfile  # here: a warm start writes nothing
+
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}_", dir=path.parent)
+        with os.fdopen(fd, "wb" if isinstance(data, bytes) else "w") as fh:
+            fh.write(data)
+        os.replace(tmp, path)
+    except OSError:
+        pass
 
 
 def source_key(name: str, model_cls: type) -> str | None:
@@ -89,7 +163,37 @@ def source_key(name: str, model_cls: type) -> str | None:
         [name, model_cls.__module__, model_cls.__qualname__, _package_digest(), ca.__version__,
          cc, str(stat.st_size), str(stat.st_mtime_ns), " ".join(FLAGS)]
     )  # fmt: skip
-    return hashlib.sha256(ident.encode()).hexdigest()[:24]
+    return sha256(ident.encode()).hexdigest()[:24]
+
+
+def remembered(name: str, model_cls: type, build: Callable[[], Any]) -> Any:
+    """``build()`` for a model class, kept pickled in the cache directory (``objects/``) under
+    the class's :func:`source_key` and the Python version, and unpickled from there later.
+
+    For what costs more to build than to unpickle: a model class's symbolic structure (its
+    CasADi functions, serialised exactly: the same graphs, so the same generated code and the
+    same numbers).  Built every time where the key is None (a model defined outside gaitopt, or
+    no compiler) or the value cannot be pickled; a file that does not unpickle is rebuilt and
+    replaced.
+    """
+    key = source_key(f"{name}_py{sys.version_info[0]}{sys.version_info[1]}", model_cls)
+    if key is None:
+        return build()
+    import pickle
+
+    path = cache_dir() / "objects" / f"{name}_{model_cls.__name__.lower()}_{key}.pickle"
+    try:
+        with open(path, "rb") as fh:
+            return pickle.load(fh)
+    except Exception:  # none yet, or a damaged or foreign file (any unpickling error)
+        pass
+    value = build()
+    try:
+        data = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception:  # e.g. a lambda inside: kept in this process only
+        return value
+    _write_atomic(path, data)
+    return value
 
 
 def _from_index(key: str) -> list[ca.Function] | None:
@@ -105,6 +209,8 @@ def _from_index(key: str) -> list[ca.Function] | None:
 
 
 def _write_index(key: str, library: Path, names: list[str]) -> None:
+    import tempfile  # here: a warm start writes nothing
+
     directory = cache_dir() / "index"
     try:
         directory.mkdir(parents=True, exist_ok=True)
@@ -147,6 +253,8 @@ def load(
     directory = cache_dir()
     library = directory / f"{name}_{_key(source, cc)}.so"
     if not library.exists():
+        import subprocess  # here: a warm start compiles nothing
+
         try:
             _compile(source, cc, library, name, verbose)
         except (OSError, subprocess.SubprocessError) as exc:
@@ -167,6 +275,10 @@ def load(
 
 
 def _compile(source: str, cc: str, library: Path, name: str, verbose: bool) -> None:
+    import signal
+    import subprocess
+    import tempfile
+
     library.parent.mkdir(parents=True, exist_ok=True)
     if verbose:
         print(f"gaitopt: compiling the {name} kernels (once; cached in {library.parent})",

@@ -72,8 +72,6 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..kernels.nodes import flow_jacobian
-
 __all__ = [
     "CollocatedArc",
     "collocated_return_map",
@@ -195,6 +193,8 @@ def defect_jacobians(
     d = C.shape[1]
     N = hs.size
     n, n_u = X.shape[0], U.shape[0]
+    from ..kernels.nodes import flow_jacobian  # here: a shooting solve needs no node kernels
+
     try:
         kern = flow_jacobian(flow, label)
     except (TypeError, RuntimeError, NotImplementedError):

@@ -41,7 +41,6 @@ import numpy as np
 from ..errors import GaitoptInputError
 from ..result import STATUS
 from .certificate import REPEATED_ADVICE, certify_orbit
-from .ipopt import solve_nlp
 from .newton import solve_square
 from .sensitivity import multipliers as sorted_multipliers
 
@@ -140,7 +139,12 @@ def default_solver(method: str) -> Callable[[Any, np.ndarray], Solved]:
         raise GaitoptInputError(f"`method` must be one of {', '.join(METHODS)}, got {method!r}")
 
     def solver(t: Any, w0: np.ndarray) -> Solved:
-        r = solve_square(t, w0) if method == "newton" else solve_nlp(t, w0)
+        if method == "newton":
+            r = solve_square(t, w0)
+        else:
+            from .ipopt import solve_nlp  # here: Newton's solves import no IPOPT wrapper
+
+            r = solve_nlp(t, w0)
         return Solved(r.w, r.converged, r.iterations)
 
     return solver
