@@ -27,6 +27,7 @@ import casadi as ca
 import numpy as np
 
 from .errors import FrozenModelError, StateError
+from .fastcall import call1
 from .model_checks import check_declared, validate_structure
 from .parameters import ParameterSpec, check_parameter, parameter_specs
 from .phases import Constraint, Phase, Section, Structure, Transition, rate_along
@@ -280,7 +281,7 @@ class HybridModel:
     def lift(self, coordinates: Mapping[str, float] | Sequence[float]) -> np.ndarray:
         """Full phase-0 state from section coordinates (a mapping by name, or a sequence)."""
         s = self.section_vector(coordinates)
-        return np.asarray(self.section.lift(s, self.p), dtype=float).ravel()
+        return call1(self.section.lift, s, self.p).ravel()  # buffered: no DM per call
 
     def section_vector(self, coordinates: Mapping[str, float] | Sequence[float]) -> np.ndarray:
         """Section coordinates as a vector; missing names come from :meth:`default_start`."""

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from ..fastcall import call1
 from ..hybrid import HybridModel, rate_along
 
 __all__ = [
@@ -113,7 +114,7 @@ def _mapped(f: ca.Function, K: int) -> ca.Function:
 def _values(f: ca.Function, arc: DenseArc, p: np.ndarray) -> np.ndarray:
     """``f(x, u, p)`` at every sample of ``arc``, a vector."""
     K = arc.x.shape[1]
-    return np.asarray(_mapped(f, K)(arc.x, arc.u, p), dtype=float).ravel()
+    return call1(_mapped(f, K), arc.x, arc.u, p).ravel()  # buffered: no DM per call
 
 
 def check_durations(arcs: Sequence[DenseArc]) -> str | None:
@@ -140,18 +141,18 @@ def check_phase_ends(
         x_end = arc.x[:, -1] if arc.end is None else np.asarray(arc.end, dtype=float).ravel()
         u_end = arc.u[:, -1]
         g = _values(tr.guard, arc, p)
-        g_end = float(tr.guard(x_end, u_end, p))
+        g_end = call1(tr.guard, x_end, u_end, p).item()
         if abs(g_end) > guard_tol * (1 + float(np.max(np.abs(g)))):
             return (
                 f"no gait: {arc.label} ends {g_end:.3g} away from its guard '{tr.name}' "
                 f"(tolerance {guard_tol:g}); the transcription's solution is inconsistent"
             )
-        if tr.admissible is not None and not float(tr.admissible(x_end, u_end, p)) > 0:
+        if tr.admissible is not None and not call1(tr.admissible, x_end, u_end, p).item() > 0:
             return (
                 f"no gait: {arc.label} ends on '{tr.name}' where that crossing is excluded "
                 f"(spurious crossing rule: {tr.doc})"
             )
-        rate = float(rate_along(phase.flow, tr.guard)(x_end, u_end, p))
+        rate = call1(rate_along(phase.flow, tr.guard), x_end, u_end, p).item()
         if not tr.direction * rate > 0:
             return (
                 f"no gait: {arc.label} reaches '{tr.name}' in the wrong direction "
@@ -201,7 +202,7 @@ def check_constraints(model: HybridModel, arcs: Sequence[DenseArc], p: np.ndarra
             unit = f" {constraint.unit}" if constraint.unit else ""
             if constraint.at_start:
                 rate = rate_along(phase.flow, constraint.function)
-                c0_rate = float(rate(arc.x[:, 0], arc.u[:, 0], p))
+                c0_rate = call1(rate, arc.x[:, 0], arc.u[:, 0], p).item()
                 if not c0_rate > CONSTRAINT_TOL:
                     return (
                         f"no gait: {constraint.outcome} at the start of {arc.label}: "

@@ -25,6 +25,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import GaitoptInputError
+from ..fastcall import call1
 from ..hybrid import HybridModel
 from ..orbit.sensitivity import map_blocks
 from ..result import OrbitArc
@@ -182,7 +183,7 @@ class ShootingProblem(SymbolicShooting):
     def segment_starts(self, w, p) -> list[np.ndarray]:
         """The segment start states (n × S) of each phase of the chain."""
         w = np.asarray(w, dtype=float).ravel()
-        x0 = np.asarray(self.section.lift(w[: self.m], p), dtype=float).ravel()
+        x0 = call1(self.section.lift, w[: self.m], p).ravel()
         out = []
         for kind, k, off, shape in self.layout:
             if kind == "nodes":
@@ -201,10 +202,7 @@ class ShootingProblem(SymbolicShooting):
             sampler = {i: trajectory_function(self.model_cls, i, S, q) for i in set(self.chain)}
         else:
             sampler = self._samplers
-        return [
-            np.asarray(sampler[i](starts[k], u, p, durations[k] / S), dtype=float)
-            for k, i in enumerate(self.chain)
-        ]
+        return [call1(sampler[i], starts[k], u, p, durations[k] / S) for k, i in enumerate(self.chain)]
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """``(lower, upper)`` bounds of the unknowns: every duration at least
