@@ -29,12 +29,13 @@ _local = threading.local()
 class _Buffer:
     """One function's buffer: its arguments' and results' arrays (nonzeros, column-major)."""
 
-    __slots__ = ("f", "args", "res", "trigger", "buffer", "shapes", "scatter", "dense_in")
+    __slots__ = ("f", "args", "res", "trigger", "buffer", "shapes", "scatter", "dense_in", "rows")
 
     def __init__(self, f: ca.Function):
         self.f = f
         self.dense_in = all(f.sparsity_in(i).is_dense() for i in range(f.n_in()))
         self.args = [np.zeros(f.nnz_in(i)) for i in range(f.n_in())]
+        self.rows = [f.size1_in(i) for i in range(f.n_in())]
         self.res = [np.zeros(f.nnz_out(i)) for i in range(f.n_out())]
         self.buffer, self.trigger = f.buffer()
         for i, a in enumerate(self.args):
@@ -84,8 +85,8 @@ def call(f: ca.Function, *args) -> list[np.ndarray]:
     the same numbers as ``[np.asarray(r) for r in f.call(args)]``."""
     b = _buffer(f)
     if b.dense_in and len(args) == len(b.args):
-        for i, (a, v) in enumerate(zip(b.args, args, strict=True)):
-            if not _fill(a, v, f.size1_in(i)):
+        for a, v, rows in zip(b.args, args, b.rows, strict=True):
+            if not _fill(a, v, rows):
                 break
         else:
             b.trigger()
