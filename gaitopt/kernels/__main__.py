@@ -1,5 +1,6 @@
 """``python -m gaitopt.kernels --warm [--jobs N] [MODEL ...]``: compile (or find in the cache) the
 shooting kernels (and their RK steps without derivatives), the verification's DOP853 steps, the
+certificate's checks, the
 compiled simulation's arc libraries, the batch simulation's functions and, for a model with
 inputs, the optimiser's node kernels and flow Jacobians
 (:func:`gaitopt.optimize.collocation.warm_kernels`) of the built-in models, so that no later call
@@ -35,6 +36,9 @@ def _warm(name: str) -> tuple[str, str, float, float]:
     if kern is not None:
         step_kernels(REGISTRY[name])  # the RK steps without derivatives (residual alone)
     verification_steps(REGISTRY[name])  # the verification's DOP853 steps
+    from .checks import check_kernels
+
+    check_kernels(REGISTRY[name])  # the certificate's guards, rules and constraints
     from .arcs import arc_library
 
     arc_library(REGISTRY[name])  # the compiled simulation's arcs

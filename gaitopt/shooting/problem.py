@@ -202,7 +202,9 @@ class ShootingProblem(SymbolicShooting):
             sampler = {i: trajectory_function(self.model_cls, i, S, q) for i in set(self.chain)}
         else:
             sampler = self._samplers
-        return [call1(sampler[i], starts[k], u, p, durations[k] / S) for k, i in enumerate(self.chain)]
+        return [
+            call1(sampler[i], starts[k], u, p, durations[k] / S) for k, i in enumerate(self.chain)
+        ]
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """``(lower, upper)`` bounds of the unknowns: every duration at least

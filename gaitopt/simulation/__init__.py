@@ -70,6 +70,7 @@ def _phase_functions(model, phase: int, u, p, constraints: bool, compiled: bool)
         entry = cache[key] = (PhaseFunctions(ph, u, p, constraints, type(model), phase), ph)
     return entry[0]
 
+
 InputPolicy = Callable[[int, np.ndarray], np.ndarray]
 #: ``feedback(t, x, phase, step) -> u``: a state-feedback input law (see :func:`simulate`).
 Feedback = Callable[[float, np.ndarray, int, int], np.ndarray]
