@@ -265,8 +265,13 @@ class HybridModel:
 
     @property
     def p(self) -> np.ndarray:
-        """The parameter vector, in declaration order."""
-        return np.array([getattr(self, s.name) for s in self.parameter_specs()], dtype=float)
+        """The parameter vector, in declaration order (a fresh copy: a model is immutable, so
+        the vector is built once)."""
+        vector = self.__dict__.get("_p_vector")
+        if vector is None:
+            vector = np.array([getattr(self, s.name) for s in self.parameter_specs()], dtype=float)
+            object.__setattr__(self, "_p_vector", vector)
+        return vector.copy()
 
     def replace(self, **changes: float) -> HybridModel:
         """A copy with some parameters changed (checked like the constructor)."""

@@ -304,8 +304,8 @@ class ShootingProblem(SymbolicShooting):
         for k, i in enumerate(self.chain):
             X = np.asarray(samples[k], dtype=float)
             # Each segment gives q + 1 samples; drop the duplicated segment starts.
-            keep = [j for j in range(X.shape[1]) if j % (q + 1) != 0 or j == 0]
-            X = X[:, keep]
+            j = np.arange(X.shape[1])
+            X = X[:, (j % (q + 1) != 0) | (j == 0)]
             t = t0 + np.linspace(0.0, durations[k], X.shape[1])
             phase = self.phases[i]
             U = np.tile(np.asarray(u, dtype=float).reshape(-1, 1), (1, X.shape[1]))
