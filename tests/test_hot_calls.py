@@ -15,8 +15,14 @@ import pytest
 import gaitopt
 from gaitopt.fastcall import call, call1
 from gaitopt.kernels import model_kernels, trajectory_function
-from gaitopt.orbit.certificate import DenseArc, GUARD_TOL, _mapped, _Samples, _values
-from gaitopt.orbit.certificate import check_early_crossings
+from gaitopt.orbit.certificate import (
+    GUARD_TOL,
+    DenseArc,
+    _mapped,
+    _Samples,
+    _values,
+    check_early_crossings,
+)
 from gaitopt.simulation.dense import Dop853Piece
 
 
@@ -189,7 +195,8 @@ def test_kept_phase_functions_and_lazy_pieces_simulate_the_same():
     eager = [Dop853Piece(a, b, y, f) for a, b, y, f in
              zip(arc.ts[:-1].tolist(), ends.tolist(), y_old, F, strict=True)]  # fmt: skip
     segments = np.clip(np.searchsorted(arc.ts, t, side="left") - 1, 0, len(eager) - 1)
-    assert np.array_equal(arc(t), np.column_stack([eager[s](ti) for s, ti in zip(segments, t)]))
+    pieces = [eager[s](ti) for s, ti in zip(segments, t, strict=True)]
+    assert np.array_equal(arc(t), np.column_stack(pieces))
     assert len(arc.interpolants) == len(eager)
     # another slope: another phase function (the kept one is not reused for other parameters)
     steep = gaitopt.simulate(m.replace(slope=0.06), x0, steps=1, rtol=1e-10, atol=1e-12)
