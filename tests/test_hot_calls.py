@@ -23,7 +23,7 @@ from gaitopt.orbit.certificate import (
     _values,
     check_early_crossings,
 )
-from gaitopt.simulation.dense import Dop853Piece
+from gaitopt.simulation.dense import Dop853Piece, PiecewiseSolution
 
 
 def _functions():
@@ -198,6 +198,12 @@ def test_kept_phase_functions_and_lazy_pieces_simulate_the_same():
     pieces = [eager[s](ti) for s, ti in zip(segments, t, strict=True)]
     assert np.array_equal(arc(t), np.column_stack(pieces))
     assert len(arc.interpolants) == len(eager)
+    # all times at once (shuffled, on the stamps, outside the arc) as piece by piece (SciPy's
+    # OdeSolution order: PiecewiseSolution.__call__), and a single time
+    t = np.concatenate([np.linspace(arc.t_min - 0.01, arc.t_max + 0.01, 31), arc.ts])
+    np.random.default_rng(5).shuffle(t)
+    assert np.array_equal(arc(t), PiecewiseSolution.__call__(arc, t))
+    assert np.array_equal(arc(t[3]), PiecewiseSolution.__call__(arc, t[3]))
     # another slope: another phase function (the kept one is not reused for other parameters)
     steep = gaitopt.simulate(m.replace(slope=0.06), x0, steps=1, rtol=1e-10, atol=1e-12)
     assert steep.section_times[-1] != first.section_times[1]

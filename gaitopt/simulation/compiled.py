@@ -179,6 +179,28 @@ class DenseArc(PiecewiseSolution):
         self._steps = (ends, y_old, F)
         self._interpolants = None
 
+    def __call__(self, t) -> np.ndarray:
+        """The state at ``t`` (n) or at each time of a 1-D ``t`` (n × len(t)): each time on its
+        step's interpolant (:class:`~gaitopt.simulation.dense.Dop853Piece`'s operations, element
+        by element the same, for all times at once)."""
+        t = np.asarray(t)
+        if t.ndim > 1:
+            raise ValueError("`t` must be a float or a 1-D array.")
+        ends, y_old, F = self._steps
+        index = np.clip(np.searchsorted(self.ts, t, side="left") - 1, 0, self.n_segments - 1)
+        t_old = self.ts[index]
+        x = (t - t_old) / (ends[index] - t_old)
+        y = np.zeros(y_old.shape[1:] if t.ndim == 0 else (t.size, y_old.shape[1]))
+        x = x if t.ndim == 0 else x[:, None]
+        for i in range(7):  # reversed(F), as Dop853Piece
+            y += F[index, 6 - i]
+            if i % 2 == 0:
+                y *= x
+            else:
+                y *= 1 - x
+        y += y_old[index]
+        return y.T
+
     @property
     def interpolants(self) -> Sequence:
         """The steps' DOP853 interpolants (each built when first evaluated: a solve reads a
