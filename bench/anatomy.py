@@ -10,6 +10,12 @@ time (``time.process_time``: on a shared machine wall time includes waiting for 
 median over the repeats; ``other`` is the median total less the stages' medians (the Python
 between them).  The machine's load is recorded beside the numbers.
 
+With Drake installed, the compass gait's warm verified solve is also set against Drake's
+``CompassGait`` simulated from the same start until consecutive post-impact states agree to 1e-8
+(default accuracy; the simulation run without its monitor to the settle time, as
+:mod:`bench.drake` times it), the two alternated ``repeats`` times in this process, each in CPU
+and wall time: the issue's goal of 20×, measured with both sides under the same load.
+
 Writes ``results/bench_anatomy.json`` (``--out``); ``--quick``: 5 repeats.
 """
 
@@ -114,6 +120,42 @@ def anatomy(name: str, repeats: int) -> dict[str, Any]:
     }
 
 
+def versus_drake(repeats: int) -> dict[str, Any] | None:
+    """The compass gait's warm verified solve against Drake settling toward 1e-8 (see the
+    module docstring), alternated; None without Drake."""
+    import gaitopt
+
+    from .drake import _drake_plain, _drake_settle, _import_drake
+
+    drake, _ = _import_drake()
+    if drake is None:
+        return None
+    model = gaitopt.model("compass_gait")
+    x0 = model.lift(model.section_vector({}))
+    settle = _drake_settle(drake, model, x0, 1e-4, 1e-8, 200)  # the settle time, untimed
+    t_end = settle["simulated_time"]
+    gaitopt.find_limit_cycle(model)
+    _drake_plain(drake, model, x0, 1e-4, t_end)
+    times: dict[str, list[float]] = {"gaitopt_cpu": [], "gaitopt_wall": [], "drake_cpu": [],
+                                     "drake_wall": []}  # fmt: skip
+    for _ in range(repeats):
+        c0, t0 = time.process_time(), time.perf_counter()
+        gaitopt.find_limit_cycle(model)
+        times["gaitopt_cpu"].append(time.process_time() - c0)
+        times["gaitopt_wall"].append(time.perf_counter() - t0)
+        c0, t0 = time.process_time(), time.perf_counter()
+        _drake_plain(drake, model, x0, 1e-4, t_end)
+        times["drake_cpu"].append(time.process_time() - c0)
+        times["drake_wall"].append(time.perf_counter() - t0)
+    med = {k: 1e3 * statistics.median(v) for k, v in times.items()}
+    return {
+        "drake_steps": settle["steps"], "drake_settled": settle["settled"],
+        "simulated_time_s": t_end, **{f"{k}_ms": v for k, v in med.items()},
+        "ratio_cpu": med["drake_cpu"] / med["gaitopt_cpu"],
+        "ratio_wall": med["drake_wall"] / med["gaitopt_wall"],
+    }  # fmt: skip
+
+
 def _load() -> list[float]:
     try:
         import os
@@ -141,6 +183,13 @@ def main(argv: list[str] | None = None) -> int:
         for label, ms in entry["stages_ms"].items():
             n = entry["calls_per_solve"].get(label)
             print(f"  {label:34s} {ms:7.3f} ms" + (f"  ×{n:g}" if n else ""))
+    if "compass_gait" in args.models:
+        vs = record["compass_vs_drake"] = versus_drake(repeats)
+        if vs is not None:
+            print(f"compass gait vs Drake settling toward 1e-8: CPU {vs['gaitopt_cpu_ms']:.2f} "
+                  f"vs {vs['drake_cpu_ms']:.1f} ms ({vs['ratio_cpu']:.1f}×), wall "
+                  f"{vs['gaitopt_wall_ms']:.2f} vs {vs['drake_wall_ms']:.1f} ms "
+                  f"({vs['ratio_wall']:.1f}×)")  # fmt: skip
     record["load_end"] = _load()
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(record, indent=1) + "\n")
