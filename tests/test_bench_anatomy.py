@@ -26,3 +26,15 @@ def test_anatomy_counts_the_stages_and_restores_them():
         assert calls[label] == 1, label
     assert all(v >= 0 for k, v in entry["stages_ms"].items() if k != "other")
     assert set(entry["stages_ms"]) == {label for label, _, _ in anatomy.STAGES} | {"other"}
+
+
+def test_kernel_steps_name_each_phase_and_its_derivative_columns():
+    # Source: the model's own sizes — one entry per phase, with its states and derivative
+    # columns (states + inputs + parameters + duration: the kernels' D); times recorded, not
+    # asserted beyond being positive.
+    m = gaitopt.model("kneed_walker")
+    steps = anatomy.kernel_steps("kneed_walker", calls=40)
+    assert [s["states"] for s in steps] == [p.n for p in m.phases]
+    for s in steps:
+        assert s["derivative_columns"] == s["states"] + len(m.inputs) + len(m.p) + 1
+        assert s["fold_us"] > 0 and s["step_us"] > 0
