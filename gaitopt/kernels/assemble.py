@@ -166,11 +166,12 @@ class Assembly:
         f, shapes = chain
         w = ca.MX.sym("w", self.size)
         u, p = ca.MX.sym("u", self.n_u), ca.MX.sym("p", self.n_p)
-        flat = f(w, u, p)
-        outputs, at = [], 0
-        for rows, cols in shapes:
-            outputs.append(ca.reshape(flat[at : at + rows * cols], rows, cols))
-            at += rows * cols
+        offsets = np.cumsum([0] + [rows * cols for rows, cols in shapes]).tolist()
+        pieces = ca.vertsplit(f(w, u, p), offsets)  # one split (slices cost ms each to build)
+        outputs = [
+            v if v.size2() == cols else ca.reshape(v, rows, cols)
+            for v, (rows, cols) in zip(pieces, shapes, strict=True)
+        ]
         if not jacobian:  # the residual chain has no D: a placeholder where _blocks reads it
             for k in range(len(self.chain)):
                 outputs.insert(4 + 12 * k, None)
@@ -299,19 +300,27 @@ class Assembly:
         return Evaluation(F, J, Ju, Jp, x_return, ends, rates, adm, durations)
 
 
+def _placed(block, col: int, width: int):
+    """``block`` at columns ``col…`` of a ``width``-column matrix (structural zeros elsewhere)."""
+    rows, cols = block.size1(), block.size2()
+    left, right = ca.MX(rows, col), ca.MX(rows, width - col - cols)
+    return ca.horzcat(left, block, right)
+
+
 def _blocks(asm: Assembly, w: ca.MX, outputs: list, jacobian: bool) -> tuple:
     """:meth:`Assembly._assemble`'s equations and Jacobians on the chain's MX outputs (the same
-    blocks, row by row): ``(F, F_w, F_u, F_p, x_return, ends, rates, admissible)``."""
+    blocks, row block by row block, each a sum of blocks placed at their columns: no slice
+    assignment, whose MX graphs take milliseconds each to build): ``(F, F_w, F_u, F_p,
+    x_return, ends, rates, admissible)``."""
     S, m, size, nu, np_ = asm.S, asm.m, asm.size, asm.n_u, asm.n_p
     K = len(asm.chain)
     F: list = []
-    J = ca.MX(size, size) if jacobian else None
-    Ju = ca.MX(size, nu) if jacobian else None
-    Jp = ca.MX(size, np_) if jacobian else None
+    J_rows: list = []
+    Ju_rows: list = []
+    Jp_rows: list = []
     x_lift, L_s, L_p = outputs[:3]
     ends, rates, adm = [], [], []
     x_return = None
-    row = 0
     for k in range(K):
         n = asm.n[k]
         off, off_T = asm.offsets[k]
@@ -330,69 +339,56 @@ def _blocks(asm: Assembly, w: ca.MX, outputs: list, jacobian: bool) -> tuple:
                 return None if j == 0 else off + n * (j - 1)
             return off + n * j
 
-        def add_state(J, Jp, R: slice, j: int, M, n: int = n, start_col=start_col):
+        def state(j: int, M, start_col=start_col) -> tuple:
+            """``M · ∂(segment start j)/∂(w, p)``: (its w-columns, its p-columns or None)."""
             c = start_col(j)
             if c is None:
-                J[R, :m] += ca.mtimes(M, L_s)
-                Jp[R, :] += ca.mtimes(M, L_p)
-            else:
-                J[R, c : c + n] += M
-            return J, Jp
+                return _placed(ca.mtimes(M, L_s), 0, size), ca.mtimes(M, L_p)
+            return _placed(M, c, size), None
 
         F.append(ca.vec(X[:, 1:] - X_end[:, :-1]))
         if jacobian:
-            eye = ca.DM.eye(n)
             for j in range(S - 1):
-                R = slice(row + j * n, row + (j + 1) * n)
                 D = Ds[:, j * q : (j + 1) * q]
-                J, Jp = add_state(J, Jp, R, j + 1, eye)
-                J, Jp = add_state(J, Jp, R, j, -D[:, :n])
-                J[R, off_T] -= D[:, -1] / S
-                Ju[R, :] -= D[:, n : n + nu]
-                Jp[R, :] -= D[:, n + nu : n + nu + np_]
-        row += n * (S - 1)
-        if jacobian:
+                J1, P1 = state(j + 1, ca.DM.eye(n))
+                J0, P0 = state(j, -D[:, :n])
+                J_rows.append(J1 + J0 - _placed(D[:, -1] / S, off_T, size))
+                Ju_rows.append(-D[:, n : n + nu])
+                Jp = -D[:, n + nu : n + nu + np_]
+                for extra in (P1, P0):
+                    Jp = Jp if extra is None else Jp + extra
+                Jp_rows.append(Jp)
             D = Ds[:, (S - 1) * q :]
-            E = ca.MX(n, size)
             E_p = D[:, n + nu : n + nu + np_]
             c = start_col(S - 1)
             if c is None:
-                E[:, :m] = ca.mtimes(D[:, :n], L_s)
+                E = _placed(ca.mtimes(D[:, :n], L_s), 0, size)
                 E_p = E_p + ca.mtimes(D[:, :n], L_p)
             else:
-                E[:, c : c + n] = D[:, :n]
-            E[:, off_T] += D[:, -1] / S
+                E = _placed(D[:, :n], c, size)
+            E = E + _placed(D[:, -1] / S, off_T, size)
             E_u = D[:, n : n + nu]
-        g = ca.vec(g)
-        R = slice(row, row + g.numel())
-        F.append(g)
+        F.append(ca.vec(g))
         if jacobian:
-            J[R, :] += ca.mtimes(g_x, E)
-            Ju[R, :] += ca.mtimes(g_x, E_u) + g_u
-            Jp[R, :] += ca.mtimes(g_x, E_p) + g_p
-        row += g.numel()
+            J_rows.append(ca.mtimes(g_x, E))
+            Ju_rows.append(ca.mtimes(g_x, E_u) + g_u)
+            Jp_rows.append(ca.mtimes(g_x, E_p) + g_p)
         r = ca.vec(r)
         if k + 1 < K:
             n1 = asm.n[k + 1]
             off1 = asm.offsets[k + 1][0]
-            R = slice(row, row + n1)
             F.append(w[off1 : off1 + n1] - r)
             if jacobian:
-                J[R, off1 : off1 + n1] += ca.DM.eye(n1)
-                J[R, :] -= ca.mtimes(r_x, E)
-                Ju[R, :] -= ca.mtimes(r_x, E_u) + r_u
-                Jp[R, :] -= ca.mtimes(r_x, E_p) + r_p
-            row += n1
+                J_rows.append(_placed(ca.DM.eye(n1), off1, size) - ca.mtimes(r_x, E))
+                Ju_rows.append(-(ca.mtimes(r_x, E_u) + r_u))
+                Jp_rows.append(-(ca.mtimes(r_x, E_p) + r_p))
         else:
             x_return = r
             sec = asm.section_index
-            R = slice(row, row + m)
             F.append(r[sec] - w[:m])
             if jacobian:
-                J[R, :] += ca.mtimes(r_x, E)[sec, :]
-                J[R, :m] -= ca.DM.eye(m)
-                Ju[R, :] += (ca.mtimes(r_x, E_u) + r_u)[sec, :]
-                Jp[R, :] += (ca.mtimes(r_x, E_p) + r_p)[sec, :]
-            row += m
-    assert row == size
+                J_rows.append(ca.mtimes(r_x, E)[sec, :] - _placed(ca.DM.eye(m), 0, size))
+                Ju_rows.append((ca.mtimes(r_x, E_u) + r_u)[sec, :])
+                Jp_rows.append((ca.mtimes(r_x, E_p) + r_p)[sec, :])
+    J, Ju, Jp = (ca.vertcat(*rows) if jacobian else None for rows in (J_rows, Ju_rows, Jp_rows))
     return ca.vertcat(*F), J, Ju, Jp, x_return, ends, ca.vertcat(*rates), ca.vertcat(*adm)
