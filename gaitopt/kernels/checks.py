@@ -47,12 +47,16 @@ def _check_functions(model_cls) -> list[ca.Function]:
 @lru_cache(maxsize=64)
 def check_kernels(model_cls) -> list[ca.Function] | None:
     """Per phase ``checks_i(x, u, p)`` (rows as :func:`check_rows` says), compiled; None where
-    there is no compiler or the model's functions cannot be evaluated on SX symbols."""
+    there is no compiler, the model's functions cannot be evaluated on SX symbols, or the class
+    is not one of gaitopt's (a user's or a derived class, e.g. an optimiser's augmented model:
+    not in the kernel index, so that a certificate never waits for the compiler there)."""
     name = f"gaitopt_{model_cls.__name__.lower()}_checks"
+    key = source_key(name, model_cls)
+    if key is None:
+        return None
     try:
         functions, compiled = load(
-            name, lambda: _check_functions(model_cls), verbose=False,
-            key=source_key(name, model_cls),
+            name, lambda: _check_functions(model_cls), verbose=False, key=key
         )  # fmt: skip
     except (RuntimeError, TypeError, NotImplementedError, IndexError):
         return None
