@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from .errors import GaitoptInputError, StateError
+from .fastcall import call1
 from .hybrid import HybridModel
 
 __all__ = [
@@ -108,7 +109,7 @@ def check_start(
             f"not a state of the model at these parameters"
         )
     with np.errstate(all="ignore"):
-        rate = np.asarray(model.phases[phase].flow(x, u, model.p), dtype=float).ravel()
+        rate = call1(model.phases[phase].flow, x, u, model.p).ravel()
     if not np.all(np.isfinite(rate)):
         raise StateError(
             f"{model.name}: `{argument}` gives the state {shown}, where the equations of motion "

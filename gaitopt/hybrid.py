@@ -27,6 +27,7 @@ import casadi as ca
 import numpy as np
 
 from .errors import FrozenModelError, StateError
+from .fastcall import call1
 from .model_checks import check_declared, validate_structure
 from .parameters import ParameterSpec, check_parameter, parameter_specs
 from .phases import Constraint, Phase, Section, Structure, Transition, rate_along
@@ -275,8 +276,13 @@ class HybridModel:
 
     @property
     def p(self) -> np.ndarray:
-        """The parameter vector, in declaration order."""
-        return np.array([getattr(self, s.name) for s in self.parameter_specs()], dtype=float)
+        """The parameter vector, in declaration order (a fresh copy: a model is immutable, so
+        the vector is built once)."""
+        vector = self.__dict__.get("_p_vector")
+        if vector is None:
+            vector = np.array([getattr(self, s.name) for s in self.parameter_specs()], dtype=float)
+            object.__setattr__(self, "_p_vector", vector)
+        return vector.copy()
 
     def replace(self, **changes: float) -> HybridModel:
         """A copy with some parameters changed (checked like the constructor)."""
@@ -291,7 +297,7 @@ class HybridModel:
     def lift(self, coordinates: Mapping[str, float] | Sequence[float]) -> np.ndarray:
         """Full phase-0 state from section coordinates (a mapping by name, or a sequence)."""
         s = self.section_vector(coordinates)
-        return np.asarray(self.section.lift(s, self.p), dtype=float).ravel()
+        return call1(self.section.lift, s, self.p).ravel()  # buffered: no DM per call
 
     def section_vector(self, coordinates: Mapping[str, float] | Sequence[float]) -> np.ndarray:
         """Section coordinates as a vector; missing names come from :meth:`default_start`."""

@@ -125,7 +125,7 @@ def find_limit_cycle(
     options = dict(inputs=inputs, discretisation=discretisation, method=method, verify=verify,
                    tol=tol)  # fmt: skip
     if guess is None and steps == 1 and follow is not False:
-        cycle = _followed_or_direct(model, options)
+        cycle = _followed_or_direct(model, options, u, start)
     else:
         cycle = solve_from_guess(model, guess, steps, u, discretisation, method, verify, tol, start)
         if starts > 1 and guess is None and not cycle.route:
@@ -146,13 +146,19 @@ def _check_search(starts: Any, seed: Any, workers: Any, scheduler: Any) -> None:
     check_workers(workers, scheduler)
 
 
-def _followed_or_direct(model: HybridModel, options: dict[str, Any]) -> LimitCycle:
+def _followed_or_direct(
+    model: HybridModel, options: dict[str, Any], u: Any, start: float
+) -> LimitCycle:
     """No guess, one step: the default gait followed from the default parameters (where they
-    differ), else — or where it is lost on the way — the direct solve from the default start."""
+    differ), else — or where it is lost on the way — the direct solve from the default start
+    (the arguments as :func:`check_arguments` returned them: checked once; ``u`` the inputs,
+    ``start`` the search's ``time.perf_counter()``)."""
     followed = follow_default_gait(model, **options)
     if followed is not None and followed.success:
         return followed
-    cycle = direct_solve(model, None, **options)
+    o = options
+    cycle = solve_from_guess(model, None, 1, u, o["discretisation"], o["method"], o["verify"],
+                             o["tol"], start)  # fmt: skip
     if followed is None:
         return cycle if cycle.route else replace(cycle, route="direct from the default start")
     lost = followed.message

@@ -1,7 +1,7 @@
 """``python -m gaitopt.kernels --warm [--jobs N] [MODEL ...]``: compile (or find in the cache) the
 shooting kernels (and their RK steps without derivatives), the verification's DOP853 steps, the
-compiled simulation's arc libraries, the batch simulation's driver and functions and, for a model
-with inputs, the optimiser's node kernels and flow Jacobians
+certificate's checks, the compiled simulation's arc libraries, the batch simulation's driver and
+functions and, for a model with inputs, the optimiser's node kernels and flow Jacobians
 (:func:`gaitopt.optimize.collocation.warm_kernels`) of the built-in models, so that no later call
 waits for the compiler.  ``--jobs`` compiles that many models at once (default: the number of
 CPUs); the cache is safe for concurrent compiles."""
@@ -35,6 +35,9 @@ def _warm(name: str) -> tuple[str, str, float, float]:
     if kern is not None:
         step_kernels(REGISTRY[name])  # the RK steps without derivatives (residual alone)
     verification_steps(REGISTRY[name])  # the verification's DOP853 steps
+    from .checks import check_kernels
+
+    check_kernels(REGISTRY[name])  # the certificate's guards, rules and constraints
     from .arcs import arc_library
 
     arc_library(REGISTRY[name])  # the compiled simulation's arcs

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from ..fastcall import call
 from . import model_kernels, phase_function, phase_residual_function
 
 __all__ = ["Evaluation", "Assembly"]
@@ -92,7 +93,9 @@ class Assembly:
         return None if self._residual[0] is None else self._residual
 
     def __getstate__(self) -> dict:
-        return {k: v for k, v in self.__dict__.items() if k != "_buffers"}  # per thread
+        # Buffers are per thread; the assembled functions are rebuilt where they are used.
+        skip = ("_buffers", "_assembled_jac", "_assembled_res")
+        return {k: v for k, v in self.__dict__.items() if k not in skip}
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state, _buffers=threading.local())
@@ -137,9 +140,57 @@ class Assembly:
         return out
 
     def __call__(self, w, u, p, *, jacobian: bool = True) -> Evaluation:
+        w = np.asarray(w, dtype=float).ravel()
+        u = np.asarray(u, dtype=float).ravel()
+        p = np.asarray(p, dtype=float).ravel()
+        if w.size == self.size and u.size == self.n_u and p.size == self.n_p and self.size:
+            f = self._assembled(jacobian)
+            if f is not None:
+                return self._read(f, w, u, p, jacobian)
         # A diverging Newton iterate gives non-finite blocks: reported by the caller, not warned.
         with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
             return self._assemble(w, u, p, jacobian)
+
+    # -- the assembly as one CasADi call -------------------------------------------------------
+    def _assembled(self, jacobian: bool) -> ca.Function | None:
+        """``(w, u, p) -> (F, F_w, F_u, F_p, x_return, ends, rates, admissible)`` (without
+        the three Jacobians for ``jacobian=False``): the chain's call and :meth:`_assemble`'s
+        arithmetic as one MX function, evaluated through one buffer (no NumPy per block)."""
+        key = "_assembled_jac" if jacobian else "_assembled_res"
+        if key not in self.__dict__:
+            chain = (self.chain_function, self.shapes) if jacobian else self._residual_chain()
+            self.__dict__[key] = None if chain is None else self._symbolic(chain, jacobian)
+        return self.__dict__[key]
+
+    def _symbolic(self, chain: tuple[ca.Function, list], jacobian: bool) -> ca.Function:
+        f, shapes = chain
+        w = ca.MX.sym("w", self.size)
+        u, p = ca.MX.sym("u", self.n_u), ca.MX.sym("p", self.n_p)
+        offsets = np.cumsum([0] + [rows * cols for rows, cols in shapes]).tolist()
+        pieces = ca.vertsplit(f(w, u, p), offsets)  # one split (slices cost ms each to build)
+        outputs = [
+            v if v.size2() == cols else ca.reshape(v, rows, cols)
+            for v, (rows, cols) in zip(pieces, shapes, strict=True)
+        ]
+        if not jacobian:  # the residual chain has no D: a placeholder where _blocks reads it
+            for k in range(len(self.chain)):
+                outputs.insert(4 + 12 * k, None)
+        F, J, Ju, Jp, x_return, ends, rates, adm = _blocks(self, w, outputs, jacobian)
+        out = [F, *((J, Ju, Jp) if jacobian else ()), x_return, ca.vertcat(*ends), rates, adm]
+        return ca.Function("assembled" if jacobian else "assembled_residual", [w, u, p],
+                           [ca.densify(o) for o in out])  # fmt: skip
+
+    def _read(self, f: ca.Function, w, u, p, jacobian: bool) -> Evaluation:
+        out = call(f, w, u, p)
+        F = out[0].ravel()
+        J, Ju, Jp = out[1:4] if jacobian else (None, None, None)
+        x_return, ends, rates, adm = (v.ravel() for v in out[-4:])
+        split, at = [], 0
+        for n in self.n:
+            split.append(ends[at : at + n])
+            at += n
+        durations = w[[off_T for _, off_T in self.offsets]]
+        return Evaluation(F, J, Ju, Jp, x_return, split, rates, adm, durations)
 
     def _assemble(self, w, u, p, jacobian: bool) -> Evaluation:
         w = np.asarray(w, dtype=float).ravel()
@@ -247,3 +298,97 @@ class Assembly:
                 row += m
         assert row == size
         return Evaluation(F, J, Ju, Jp, x_return, ends, rates, adm, durations)
+
+
+def _placed(block, col: int, width: int):
+    """``block`` at columns ``col…`` of a ``width``-column matrix (structural zeros elsewhere)."""
+    rows, cols = block.size1(), block.size2()
+    left, right = ca.MX(rows, col), ca.MX(rows, width - col - cols)
+    return ca.horzcat(left, block, right)
+
+
+def _blocks(asm: Assembly, w: ca.MX, outputs: list, jacobian: bool) -> tuple:
+    """:meth:`Assembly._assemble`'s equations and Jacobians on the chain's MX outputs (the same
+    blocks, row block by row block, each a sum of blocks placed at their columns: no slice
+    assignment, whose MX graphs take milliseconds each to build): ``(F, F_w, F_u, F_p,
+    x_return, ends, rates, admissible)``."""
+    S, m, size, nu, np_ = asm.S, asm.m, asm.size, asm.n_u, asm.n_p
+    K = len(asm.chain)
+    F: list = []
+    J_rows: list = []
+    Ju_rows: list = []
+    Jp_rows: list = []
+    x_lift, L_s, L_p = outputs[:3]
+    ends, rates, adm = [], [], []
+    x_return = None
+    for k in range(K):
+        n = asm.n[k]
+        off, off_T = asm.offsets[k]
+        if k == 0:
+            X = ca.horzcat(x_lift, ca.reshape(w[off : off + n * (S - 1)], n, S - 1))
+        else:
+            X = ca.reshape(w[off : off + n * S], n, S)
+        X_end, Ds, g, g_x, g_u, g_p, r, r_x, r_u, r_p, rate, a = outputs[3 + 12 * k : 15 + 12 * k]
+        q = n + nu + np_ + 1
+        rates.append(rate)
+        adm.append(a)
+        ends.append(X_end[:, -1])
+
+        def start_col(j: int, k: int = k, off: int = off, n: int = n) -> int | None:
+            if k == 0:
+                return None if j == 0 else off + n * (j - 1)
+            return off + n * j
+
+        def state(j: int, M, start_col=start_col) -> tuple:
+            """``M · ∂(segment start j)/∂(w, p)``: (its w-columns, its p-columns or None)."""
+            c = start_col(j)
+            if c is None:
+                return _placed(ca.mtimes(M, L_s), 0, size), ca.mtimes(M, L_p)
+            return _placed(M, c, size), None
+
+        F.append(ca.vec(X[:, 1:] - X_end[:, :-1]))
+        if jacobian:
+            for j in range(S - 1):
+                D = Ds[:, j * q : (j + 1) * q]
+                J1, P1 = state(j + 1, ca.DM.eye(n))
+                J0, P0 = state(j, -D[:, :n])
+                J_rows.append(J1 + J0 - _placed(D[:, -1] / S, off_T, size))
+                Ju_rows.append(-D[:, n : n + nu])
+                Jp = -D[:, n + nu : n + nu + np_]
+                for extra in (P1, P0):
+                    Jp = Jp if extra is None else Jp + extra
+                Jp_rows.append(Jp)
+            D = Ds[:, (S - 1) * q :]
+            E_p = D[:, n + nu : n + nu + np_]
+            c = start_col(S - 1)
+            if c is None:
+                E = _placed(ca.mtimes(D[:, :n], L_s), 0, size)
+                E_p = E_p + ca.mtimes(D[:, :n], L_p)
+            else:
+                E = _placed(D[:, :n], c, size)
+            E = E + _placed(D[:, -1] / S, off_T, size)
+            E_u = D[:, n : n + nu]
+        F.append(ca.vec(g))
+        if jacobian:
+            J_rows.append(ca.mtimes(g_x, E))
+            Ju_rows.append(ca.mtimes(g_x, E_u) + g_u)
+            Jp_rows.append(ca.mtimes(g_x, E_p) + g_p)
+        r = ca.vec(r)
+        if k + 1 < K:
+            n1 = asm.n[k + 1]
+            off1 = asm.offsets[k + 1][0]
+            F.append(w[off1 : off1 + n1] - r)
+            if jacobian:
+                J_rows.append(_placed(ca.DM.eye(n1), off1, size) - ca.mtimes(r_x, E))
+                Ju_rows.append(-(ca.mtimes(r_x, E_u) + r_u))
+                Jp_rows.append(-(ca.mtimes(r_x, E_p) + r_p))
+        else:
+            x_return = r
+            sec = asm.section_index
+            F.append(r[sec] - w[:m])
+            if jacobian:
+                J_rows.append(ca.mtimes(r_x, E)[sec, :] - _placed(ca.DM.eye(m), 0, size))
+                Ju_rows.append((ca.mtimes(r_x, E_u) + r_u)[sec, :])
+                Jp_rows.append((ca.mtimes(r_x, E_p) + r_p)[sec, :])
+    J, Ju, Jp = (ca.vertcat(*rows) if jacobian else None for rows in (J_rows, Ju_rows, Jp_rows))
+    return ca.vertcat(*F), J, Ju, Jp, x_return, ends, ca.vertcat(*rates), ca.vertcat(*adm)

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from ..fastcall import call1
 from ..hybrid import HybridModel, rate_along
 
 __all__ = [
@@ -113,7 +114,50 @@ def _mapped(f: ca.Function, K: int) -> ca.Function:
 def _values(f: ca.Function, arc: DenseArc, p: np.ndarray) -> np.ndarray:
     """``f(x, u, p)`` at every sample of ``arc``, a vector."""
     K = arc.x.shape[1]
-    return np.asarray(_mapped(f, K)(arc.x, arc.u, p), dtype=float).ravel()
+    return call1(_mapped(f, K), arc.x, arc.u, p).ravel()  # buffered: no DM per call
+
+
+class _Samples:
+    """The guards, admissibility rules and constraints of each arc's phase at every sample,
+    read by the checks: from the model class's compiled check kernels
+    (:mod:`gaitopt.kernels.checks`, one call per arc, kept for the arc while the certificate
+    runs) where it has them, else each function by itself (:func:`_values`)."""
+
+    def __init__(self, model: HybridModel, p: np.ndarray):
+        from ..kernels.checks import check_kernels
+
+        self.model, self.p = model, p
+        self.kernels = check_kernels(type(model))
+        self._tables: dict[int, tuple[DenseArc, np.ndarray]] = {}
+
+    def _table(self, arc: DenseArc) -> np.ndarray:
+        entry = self._tables.get(id(arc))
+        if entry is None or entry[0] is not arc:
+            f = _mapped(self.kernels[arc.phase], arc.x.shape[1])
+            entry = self._tables[id(arc)] = (arc, call1(f, arc.x, arc.u, self.p))
+        return entry[1]
+
+    def guard(self, arc: DenseArc, j: int) -> np.ndarray:
+        tr = self.model.phases[arc.phase].transitions[j]
+        if self.kernels is None:
+            return _values(tr.guard, arc, self.p)
+        return self._table(arc)[j]
+
+    def admissible(self, arc: DenseArc, j: int) -> np.ndarray | None:
+        """Transition ``j``'s admissibility at the samples (None: it has no rule)."""
+        phase = self.model.phases[arc.phase]
+        tr = phase.transitions[j]
+        if tr.admissible is None:
+            return None
+        if self.kernels is None:
+            return _values(tr.admissible, arc, self.p)
+        return self._table(arc)[len(phase.transitions) + j]
+
+    def constraint(self, arc: DenseArc, j: int) -> np.ndarray:
+        phase = self.model.phases[arc.phase]
+        if self.kernels is None:
+            return _values(phase.constraints[j].function, arc, self.p)
+        return self._table(arc)[2 * len(phase.transitions) + j]
 
 
 def check_durations(arcs: Sequence[DenseArc]) -> str | None:
@@ -129,29 +173,31 @@ def check_durations(arcs: Sequence[DenseArc]) -> str | None:
 
 
 def check_phase_ends(
-    model: HybridModel, arcs: Sequence[DenseArc], p: np.ndarray, guard_tol: float
-) -> str | None:
+    model: HybridModel, arcs: Sequence[DenseArc], p: np.ndarray, guard_tol: float,
+    samples: _Samples | None = None,
+) -> str | None:  # fmt: skip
     """Each phase ends on its cycle guard (``|g| ≤ guard_tol · (1 + max |g|)`` at its end state
     :attr:`DenseArc.end`: the transcription's own equation, re-read), in the stated direction,
     admissibly."""
+    samples = samples or _Samples(model, p)
     for arc in arcs:
         phase = model.phases[arc.phase]
         tr = phase.transitions[0]
         x_end = arc.x[:, -1] if arc.end is None else np.asarray(arc.end, dtype=float).ravel()
         u_end = arc.u[:, -1]
-        g = _values(tr.guard, arc, p)
-        g_end = float(tr.guard(x_end, u_end, p))
+        g = samples.guard(arc, 0)
+        g_end = call1(tr.guard, x_end, u_end, p).item()
         if abs(g_end) > guard_tol * (1 + float(np.max(np.abs(g)))):
             return (
                 f"no gait: {arc.label} ends {g_end:.3g} away from its guard '{tr.name}' "
                 f"(tolerance {guard_tol:g}); the transcription's solution is inconsistent"
             )
-        if tr.admissible is not None and not float(tr.admissible(x_end, u_end, p)) > 0:
+        if tr.admissible is not None and not call1(tr.admissible, x_end, u_end, p).item() > 0:
             return (
                 f"no gait: {arc.label} ends on '{tr.name}' where that crossing is excluded "
                 f"(spurious crossing rule: {tr.doc})"
             )
-        rate = float(rate_along(phase.flow, tr.guard)(x_end, u_end, p))
+        rate = call1(rate_along(phase.flow, tr.guard), x_end, u_end, p).item()
         if not tr.direction * rate > 0:
             return (
                 f"no gait: {arc.label} reaches '{tr.name}' in the wrong direction "
@@ -161,30 +207,39 @@ def check_phase_ends(
 
 
 def check_early_crossings(
-    model: HybridModel, arcs: Sequence[DenseArc], p: np.ndarray
+    model: HybridModel, arcs: Sequence[DenseArc], p: np.ndarray, samples: _Samples | None = None
 ) -> str | None:
     """No guard of a phase is crossed (admissibly, in its direction) before the phase ends: a
     crossing counts once the guard has been strictly on its pre-crossing side
     (``direction · g < −GUARD_TOL · (1 + max |g|)``), as in the simulation."""
+    samples = samples or _Samples(model, p)
     for arc in arcs:
         phase = model.phases[arc.phase]
         K = arc.x.shape[1]
         for j, tr in enumerate(phase.transitions):
-            g = tr.direction * _values(tr.guard, arc, p)
-            a = _values(tr.admissible, arc, p) if tr.admissible is not None else np.ones(K)
+            g = tr.direction * samples.guard(arc, j)
+            a = samples.admissible(arc, j)
+            a = np.ones(K) if a is None else a
             armed = np.maximum.accumulate(g < -GUARD_TOL * (1 + np.max(np.abs(g))))
             last = K - 1 if j == 0 else K  # the cycle transition fires at the last sample
-            for idx in range(1, last):
-                if armed[idx - 1] and g[idx - 1] < 0 <= g[idx] and (a[idx - 1] > 0 or a[idx] > 0):
-                    return (
-                        f"no gait: the orbit crosses '{tr.name}' inside {arc.label} at t = "
-                        f"{arc.t[idx]:.4g} s, before the phase ends (e.g. a foot through the "
-                        f"ground); not a gait with this phase sequence"
-                    )
+            # a crossing at sample idx (1 ≤ idx < last): armed before it, from below to ≥ 0,
+            # admissible at one of its ends
+            before, after = slice(0, max(last - 1, 0)), slice(1, max(last, 1))
+            admissible = (a[before] > 0) | (a[after] > 0)
+            hits = np.flatnonzero(armed[before] & (g[before] < 0) & (g[after] >= 0) & admissible)
+            if hits.size:
+                idx = int(hits[0]) + 1
+                return (
+                    f"no gait: the orbit crosses '{tr.name}' inside {arc.label} at t = "
+                    f"{arc.t[idx]:.4g} s, before the phase ends (e.g. a foot through the "
+                    f"ground); not a gait with this phase sequence"
+                )
     return None
 
 
-def check_constraints(model: HybridModel, arcs: Sequence[DenseArc], p: np.ndarray) -> str | None:
+def check_constraints(
+    model: HybridModel, arcs: Sequence[DenseArc], p: np.ndarray, samples: _Samples | None = None
+) -> str | None:
     """Every declared unilateral constraint (:attr:`Phase.constraints`) holds on the samples.
 
     ``c ≥ −CONSTRAINT_TOL · (1 + max |c|)`` at every sample (but the first of one declared
@@ -193,15 +248,16 @@ def check_constraints(model: HybridModel, arcs: Sequence[DenseArc], p: np.ndarra
     CONSTRAINT_TOL`` with the input of the first sample (the trailing foot lifts off).  Returns
     the first violation in words (naming the constraint and the rule), or None.
     """
+    samples = samples or _Samples(model, p)
     for arc in arcs:
         phase = model.phases[arc.phase]
-        for constraint in phase.constraints:
-            c = _values(constraint.function, arc, p)
+        for index, constraint in enumerate(phase.constraints):
+            c = samples.constraint(arc, index)
             scale = CONSTRAINT_TOL * (1 + float(np.max(np.abs(c))))
             unit = f" {constraint.unit}" if constraint.unit else ""
             if constraint.at_start:
                 rate = rate_along(phase.flow, constraint.function)
-                c0_rate = float(rate(arc.x[:, 0], arc.u[:, 0], p))
+                c0_rate = call1(rate, arc.x[:, 0], arc.u[:, 0], p).item()
                 if not c0_rate > CONSTRAINT_TOL:
                     return (
                         f"no gait: {constraint.outcome} at the start of {arc.label}: "
@@ -274,11 +330,12 @@ def certify_orbit(
     repeated_advice : str
         What to try when the orbit is a shorter one repeated (``{steps}``, ``{j}`` filled in).
     """
+    samples = _Samples(model, p)  # each arc's checks at its samples, evaluated once
     for check in (
         lambda: check_durations(arcs),
-        lambda: check_phase_ends(model, arcs, p, guard_tol),
-        lambda: check_early_crossings(model, arcs, p),
-        lambda: check_constraints(model, arcs, p),
+        lambda: check_phase_ends(model, arcs, p, guard_tol, samples),
+        lambda: check_early_crossings(model, arcs, p, samples),
+        lambda: check_constraints(model, arcs, p, samples),
         lambda: check_minimal_period(model, arcs, steps, repeated_advice) if steps > 1 else None,
     ):
         defect = check()

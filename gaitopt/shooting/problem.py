@@ -25,6 +25,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import GaitoptInputError
+from ..fastcall import call1
 from ..hybrid import HybridModel
 from ..orbit.sensitivity import map_blocks
 from ..result import OrbitArc
@@ -182,7 +183,7 @@ class ShootingProblem(SymbolicShooting):
     def segment_starts(self, w, p) -> list[np.ndarray]:
         """The segment start states (n × S) of each phase of the chain."""
         w = np.asarray(w, dtype=float).ravel()
-        x0 = np.asarray(self.section.lift(w[: self.m], p), dtype=float).ravel()
+        x0 = call1(self.section.lift, w[: self.m], p).ravel()
         out = []
         for kind, k, off, shape in self.layout:
             if kind == "nodes":
@@ -202,8 +203,7 @@ class ShootingProblem(SymbolicShooting):
         else:
             sampler = self._samplers
         return [
-            np.asarray(sampler[i](starts[k], u, p, durations[k] / S), dtype=float)
-            for k, i in enumerate(self.chain)
+            call1(sampler[i], starts[k], u, p, durations[k] / S) for k, i in enumerate(self.chain)
         ]
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -304,8 +304,8 @@ class ShootingProblem(SymbolicShooting):
         for k, i in enumerate(self.chain):
             X = np.asarray(samples[k], dtype=float)
             # Each segment gives q + 1 samples; drop the duplicated segment starts.
-            keep = [j for j in range(X.shape[1]) if j % (q + 1) != 0 or j == 0]
-            X = X[:, keep]
+            j = np.arange(X.shape[1])
+            X = X[:, (j % (q + 1) != 0) | (j == 0)]
             t = t0 + np.linspace(0.0, durations[k], X.shape[1])
             phase = self.phases[i]
             U = np.tile(np.asarray(u, dtype=float).reshape(-1, 1), (1, X.shape[1]))

@@ -16,6 +16,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..fastcall import call1
 from ..hybrid import HybridModel
 from ..orbit.layout import Layout
 from ..orbit.referee import LADDER, referee
@@ -238,7 +239,7 @@ class ShootingTranscription:
         """``("standing", why)`` where the orbit is an equilibrium (the state does not change:
         it solves the shooting equations with any phase duration), else None."""
         x_star = self.model.lift(np.asarray(w, dtype=float).ravel()[: self.problem.m])
-        rate = np.asarray(self.model.phases[0].flow(x_star, self._u, self.model.p), dtype=float)
+        rate = call1(self.model.phases[0].flow, x_star, self._u, self.model.p)
         if float(np.max(np.abs(rate.ravel()))) <= 1e-8 * (1 + float(np.max(np.abs(x_star)))):
             return "standing", (
                 "no gait: the orbit found is standing still "

@@ -18,6 +18,7 @@ After a reset the integration restarts in the target phase.
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -41,6 +42,34 @@ def simulate_batch(*args: Any, **kwargs: Any):
 
 #: SciPy's ``OdeSolver`` classes by name (``scipy.integrate`` is imported on first use: 0.4 s).
 _METHODS = ("DOP853", "RK45", "Radau", "LSODA")
+
+#: Per thread, the :class:`PhaseFunctions` (with their buffers and compiled arc plans) of the
+#: last constant-input phases simulated by compiled arcs: a solve simulates the same phases
+#: twice (its guess and its referee), a continuation at every point; their construction is most
+#: of a short simulation's Python.  Reused as a simulation reuses them from one step to the next.
+_PHASES = threading.local()
+_MAX_PHASES = 64
+
+
+def _phase_functions(model, phase: int, u, p, constraints: bool, compiled: bool):
+    """``PhaseFunctions(model.phases[phase], u, p, constraints, type(model), phase)``, kept per
+    thread for compiled arcs (see :data:`_PHASES`)."""
+    if not compiled:
+        return PhaseFunctions(model.phases[phase], u, p, constraints, type(model), phase)
+    cache = getattr(_PHASES, "cache", None)
+    if cache is None:
+        cache = _PHASES.cache = {}
+    ph = model.phases[phase]
+    key = (type(model), id(ph), phase, bool(constraints),
+           np.asarray(u, dtype=float).tobytes(), np.asarray(p, dtype=float).tobytes())  # fmt: skip
+    entry = cache.get(key)
+    if entry is None:
+        if len(cache) >= _MAX_PHASES:
+            cache.pop(next(iter(cache)))
+        u, p = np.array(u, dtype=float), np.array(p, dtype=float)  # its own: kept past this call
+        entry = cache[key] = (PhaseFunctions(ph, u, p, constraints, type(model), phase), ph)
+    return entry[0]
+
 
 InputPolicy = Callable[[int, np.ndarray], np.ndarray]
 #: ``feedback(t, x, phase, step) -> u``: a state-feedback input law (see :func:`simulate`).
@@ -202,8 +231,8 @@ def simulate(
             key = (phase, np.asarray(u, dtype=float).tobytes(), np.asarray(p).tobytes())
             funcs = known.get(key)
             if funcs is None:
-                funcs = known[key] = PhaseFunctions(
-                    model.phases[phase], u, p, constraints, type(model), phase
+                funcs = known[key] = _phase_functions(
+                    model, phase, u, p, constraints, library is not None
                 )
         else:
             funcs = PhaseFunctions(model.phases[phase], u, p, constraints, type(model), phase)

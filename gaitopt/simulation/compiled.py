@@ -15,6 +15,8 @@ Python loop).  Imported on a simulation's first compiled arc.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from ..kernels.arcs import ArcLibrary, address
@@ -177,17 +179,60 @@ class DenseArc(PiecewiseSolution):
         self._steps = (ends, y_old, F)
         self._interpolants = None
 
+    def __call__(self, t) -> np.ndarray:
+        """The state at ``t`` (n) or at each time of a 1-D ``t`` (n × len(t)): each time on its
+        step's interpolant (:class:`~gaitopt.simulation.dense.Dop853Piece`'s operations, element
+        by element the same, for all times at once)."""
+        t = np.asarray(t)
+        if t.ndim > 1:
+            raise ValueError("`t` must be a float or a 1-D array.")
+        ends, y_old, F = self._steps
+        index = np.clip(np.searchsorted(self.ts, t, side="left") - 1, 0, self.n_segments - 1)
+        t_old = self.ts[index]
+        x = (t - t_old) / (ends[index] - t_old)
+        y = np.zeros(y_old.shape[1:] if t.ndim == 0 else (t.size, y_old.shape[1]))
+        x = x if t.ndim == 0 else x[:, None]
+        for i in range(7):  # reversed(F), as Dop853Piece
+            y += F[index, 6 - i]
+            if i % 2 == 0:
+                y *= x
+            else:
+                y *= 1 - x
+        y += y_old[index]
+        return y.T
+
     @property
-    def interpolants(self) -> list:
-        """The steps' DOP853 interpolants (built on first use)."""
+    def interpolants(self) -> Sequence:
+        """The steps' DOP853 interpolants (each built when first evaluated: a solve reads a
+        few of an arc's steps, not all)."""
         if self._interpolants is None:
-            ends, y_old, F = self._steps
-            starts = self.ts[:-1].tolist()
-            self._interpolants = [
-                Dop853Piece(t_old, t_new, y, f)
-                for t_old, t_new, y, f in zip(starts, ends.tolist(), y_old, F, strict=True)
-            ]
+            self._interpolants = _Pieces(self.ts, *self._steps)
         return self._interpolants
+
+
+class _Pieces(Sequence):
+    """Each step's :class:`~gaitopt.simulation.dense.Dop853Piece`, built on first access."""
+
+    def __init__(self, ts: np.ndarray, ends: np.ndarray, y_old: np.ndarray, F: np.ndarray):
+        self._ts, self._ends, self._y_old, self._F = ts, ends, y_old, F
+        self._built: dict[int, Dop853Piece] = {}
+
+    def __len__(self) -> int:
+        return self._ends.size
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[j] for j in range(*i.indices(len(self)))]
+        i = int(i)
+        i = i + len(self) if i < 0 else i
+        if not 0 <= i < len(self):
+            raise IndexError(i)
+        piece = self._built.get(i)
+        if piece is None:
+            piece = self._built[i] = Dop853Piece(
+                float(self._ts[i]), float(self._ends[i]), self._y_old[i], self._F[i]
+            )
+        return piece
 
 
 def rests_on_guard(funcs: PhaseFunctions, library: ArcLibrary, index: int, x0: np.ndarray):

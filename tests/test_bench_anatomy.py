@@ -1,0 +1,40 @@
+"""``bench.anatomy``: the stages of a warm verified solve, timed by wrapping each stage (its
+fast mode, two repeats of the compass gait)."""
+
+from __future__ import annotations
+
+import gaitopt
+from bench import anatomy
+
+
+def test_anatomy_counts_the_stages_and_restores_them():
+    # Source: the solve's own record — one Jacobian evaluation per Newton iteration (the
+    # compass gait at its defaults needs no mesh refinement, so all of them are the one
+    # solve's: LimitCycle.iterations); one call of every other stage per solve.  Times are not
+    # asserted (no timing assertions), only that they are recorded and non-negative.
+    import gaitopt.kernels.assemble as assemble
+    import gaitopt.orbit.solve as orbit_solve
+
+    before = (assemble.Assembly.__call__, orbit_solve.certificate)
+    entry = anatomy.anatomy("compass_gait", 2)
+    assert (assemble.Assembly.__call__, orbit_solve.certificate) == before  # put back
+    cycle = gaitopt.find_limit_cycle(gaitopt.model("compass_gait"))
+    assert entry["success"] and entry["verified"] and entry["repeats"] == 2
+    calls = entry["calls_per_solve"]
+    assert calls["  Jacobian evaluations (F, ∂F/∂w)"] == cycle.iterations
+    for label in ("arguments", "guess simulation", "Newton", "certificate", "referee", "result"):
+        assert calls[label] == 1, label
+    assert all(v >= 0 for k, v in entry["stages_ms"].items() if k != "other")
+    assert set(entry["stages_ms"]) == {label for label, _, _ in anatomy.STAGES} | {"other"}
+
+
+def test_kernel_steps_name_each_phase_and_its_derivative_columns():
+    # Source: the model's own sizes — one entry per phase, with its states and derivative
+    # columns (states + inputs + parameters + duration: the kernels' D); times recorded, not
+    # asserted beyond being positive.
+    m = gaitopt.model("kneed_walker")
+    steps = anatomy.kernel_steps("kneed_walker", calls=40)
+    assert [s["states"] for s in steps] == [p.n for p in m.phases]
+    for s in steps:
+        assert s["derivative_columns"] == s["states"] + len(m.inputs) + len(m.p) + 1
+        assert s["fold_us"] > 0 and s["step_us"] > 0
