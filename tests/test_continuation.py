@@ -160,3 +160,61 @@ def test_slip_fold_in_touchdown_angle_is_where_two_apex_fixed_points_meet():
         near = model.replace(touchdown_angle=lp + offset)
         found = fixed_points_1d(near, (0.86, 0.95), samples=40)
         assert len(found.cycles) == expected, (offset, found.points)
+
+
+def _switch(compass_branch, monkeypatch, *, newton_fails: bool):
+    """Switch at the compass gait's first PD with the continuation's follower replaced by one
+    that keeps the period-2 orbit found; counts the simulated starts (find_limit_cycle)."""
+    from gaitopt.continuation import switching
+
+    calls = {"simulated": 0}
+    original = switching.find_limit_cycle
+
+    def counted(*args, **kwargs):
+        calls["simulated"] += 1
+        return original(*args, **kwargs)
+
+    def refused(*args, **kwargs):
+        raise GaitoptInputError("refused on purpose: the simulated starts must find it")
+
+    monkeypatch.setattr(switching, "find_limit_cycle", counted)
+    if newton_fails:
+        monkeypatch.setattr(switching, "solve_gait", refused)
+    found = []
+
+    def follow(doubled, *args):
+        found.append(doubled)
+        return type(compass_branch)(doubled.model, "slope", doubled.steps)
+
+    [pd] = [sp for sp in compass_branch.special_points if sp.kind == "PD"]
+    child, note = switching.switch_at_period_doubling(
+        pd, "slope", 1.0, 0.0805, (-math.inf, math.inf), PseudoArclength(), False, 1e-10, 2,
+        follow=follow,
+    )  # fmt: skip
+    return pd, child, note, found, calls
+
+
+def test_switch_tries_newton_from_the_doubled_orbit_before_simulating(compass_branch, monkeypatch):
+    # Source: the switch's documented order (switching module docstring): Newton from the doubled
+    # orbit plus ε·null vector at every offset and amplitude before any simulated start.  At the
+    # compass gait's first PD the first Newton start finds the period-2 orbit born there (the
+    # born_at test: within 5 % of the parent, a multiplier within 0.25 of +1), so no simulation
+    # runs (exact count).
+    from gaitopt.continuation.switching import born_at
+
+    pd, child, note, found, calls = _switch(compass_branch, monkeypatch, newton_fails=False)
+    assert child is not None and note.startswith("period-2 branch followed")
+    assert calls["simulated"] == 0
+    assert found[0].success and found[0].steps == 2 and born_at(found[0], pd.cycle)
+
+
+def test_switch_falls_back_to_simulated_starts(compass_branch, monkeypatch):
+    # Source: the same switch with every Newton start refused: the simulated starts (from the
+    # section point displaced along the null vector) must find an orbit born at the PD, within
+    # 1e-3 relative of the PD in the slope (the largest offset, OFFSETS[0] tried first).
+    from gaitopt.continuation.switching import born_at
+
+    pd, child, note, found, calls = _switch(compass_branch, monkeypatch, newton_fails=True)
+    assert child is not None and calls["simulated"] >= 1
+    assert found[0].success and found[0].steps == 2 and born_at(found[0], pd.cycle)
+    assert abs(found[0].model.slope - pd.param) <= 1e-3 * pd.param * (1 + 1e-12)

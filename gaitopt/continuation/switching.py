@@ -9,7 +9,10 @@ plus ``ε`` times that null vector, with ``ε ∝ sqrt(|λ − λ_PD|)`` (the am
 period-doubled orbit grows as the square root of the distance from the PD): no simulation, and
 every candidate is kept only if it was born at the PD (next to the parent orbit, with the
 multiplier +1 into which the parent's −1 squares), so that an unrelated period-2k orbit nearby is
-never mistaken for the new branch.
+never mistaken for the new branch.  These Newton starts are tried at every parameter offset and
+amplitude before any start that simulates from a displaced section point (the fallback): a
+simulated start that leads to no orbit costs a whole line search stalled next to a minimum of
+``‖F‖`` that is no root, which was most of the compass gait's cascade time.
 """
 
 from __future__ import annotations
@@ -91,6 +94,7 @@ def switch_at_period_doubling(
     lam_pd = sp.param
     tried, last = 0, "no parameter value next to the PD lies in the allowed range"
     for side in (direction, -direction):
+        starts = []  # (offset, parameter value, model, input) on this side
         for offset in OFFSETS:
             lam = lam_pd + side * offset * max(abs(lam_pd), 1e-3)
             if to is not None and side == direction and (lam - to) * direction > 0:
@@ -103,40 +107,49 @@ def switch_at_period_doubling(
                 continue
             # A model whose nominal input is set by the parameter (SLIP) keeps it nominal.
             u = model.nominal_input() if nominal else np.asarray(cycle.inputs, dtype=float)
-            for amplitude in AMPLITUDES:
-                eps = amplitude * math.sqrt(offset)
-                for doubled in _candidates(cycle, model, problem, w2, null, eps, u, verify, tol):
-                    tried += 1
-                    if isinstance(doubled, str):
-                        last = doubled
-                        continue
-                    if doubled.success and born_at(doubled, cycle):
-                        break
-                    last = (
-                        doubled.message
-                        if not doubled.success
-                        else f"the period-{k2} orbit found at {param} = {lam:.10g} was not born "
-                        f"at the PD (too far from the parent orbit, or no multiplier near +1)"
+            starts.append((offset, lam, model, u))
+        # Newton from the doubled orbit first at every offset and amplitude (no simulation),
+        # then the simulated starts (see _candidates).
+        for simulated in (False, True):
+            for offset, lam, model, u in starts:
+                for amplitude in AMPLITUDES:
+                    eps = amplitude * math.sqrt(offset)
+                    candidates = _candidates(
+                        cycle, model, problem, w2, null, eps, u, verify, tol, simulated
                     )
-                else:
-                    continue
-                child = follow(
-                    doubled,
-                    param,
-                    side,
-                    to if side == direction else None,
-                    bounds,
-                    options,
-                    False,
-                    True,
-                    max_period,
-                    verify,
-                    tol,
-                )
-                return child, (
-                    f"period-{k2} branch followed from {param} = {lam:.10g} "
-                    f"({len(child.cycles)} gaits)"
-                )
+                    for doubled in candidates:
+                        tried += 1
+                        if isinstance(doubled, str):
+                            last = doubled
+                            continue
+                        if doubled.success and born_at(doubled, cycle):
+                            break
+                        last = (
+                            doubled.message
+                            if not doubled.success
+                            else f"the period-{k2} orbit found at {param} = {lam:.10g} was not "
+                            f"born at the PD (too far from the parent orbit, or no multiplier "
+                            f"near +1)"
+                        )
+                    else:
+                        continue
+                    child = follow(
+                        doubled,
+                        param,
+                        side,
+                        to if side == direction else None,
+                        bounds,
+                        options,
+                        False,
+                        True,
+                        max_period,
+                        verify,
+                        tol,
+                    )
+                    return child, (
+                        f"period-{k2} branch followed from {param} = {lam:.10g} "
+                        f"({len(child.cycles)} gaits)"
+                    )
     return None, (
         f"no period-{k2} branch found: {tried} starts along the PD's null vector (Newton from "
         f"the doubled orbit, and simulations from the displaced section point; parameter offsets "
@@ -146,21 +159,28 @@ def switch_at_period_doubling(
     )
 
 
-def _candidates(cycle, model, problem, w2, null, eps, u, verify, tol):
+def _candidates(cycle, model, problem, w2, null, eps, u, verify, tol, simulated):
     """The period-2k orbits tried at one parameter value and amplitude ``eps`` (a generator, so
     the second is computed only if the first is not the orbit sought), each a
     :class:`LimitCycle` or, where the start is refused, the reason as a string.
 
-    1. Newton from the doubled parent orbit plus ``eps`` times the null vector: no simulation,
-       but the null vector's duration components can be far larger than its section ones (SLIP:
-       tens of seconds per metre of apex height), so this start may run backwards in time.
-    2. The usual search from the section point displaced by ``±eps`` times the null vector's
-       section part: its unknowns come from a simulation, so the durations are consistent.
+    Without ``simulated``: Newton from the doubled parent orbit plus ``eps`` times the null
+    vector (the predictor of Allgower & Georg §8.1): no simulation, but the null vector's
+    duration components can be far larger than its section ones (SLIP: tens of seconds per metre
+    of apex height), so this start may run backwards in time.
+
+    With ``simulated``: the usual search from the section point displaced by ``±eps`` times the
+    null vector's section part: its unknowns come from a simulation, so the durations are
+    consistent.  These are the fallback: tried only after the Newton starts failed at every
+    offset and amplitude, because a start that leads to no orbit costs a whole line search (up
+    to 100 iterations stalled next to a minimum of ``‖F‖`` that is no root).
     """
-    try:
-        yield solve_gait(model, problem, w2 + eps * null, u, verify=verify, tol=tol)
-    except GaitoptInputError as exc:
-        yield str(exc)
+    if not simulated:
+        try:
+            yield solve_gait(model, problem, w2 + eps * null, u, verify=verify, tol=tol)
+        except GaitoptInputError as exc:
+            yield str(exc)
+        return
     m = len(cycle.section_point)
     for sign in (1.0, -1.0):  # the orbit visits both sides; one may leave the map's domain
         shifted = cycle.section_point + sign * eps * null[:m]
