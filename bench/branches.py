@@ -15,7 +15,9 @@ Run alone, ``python -m bench.branches [--repeats N] [--out FILE]`` repeats the s
 CPU), the orbit diagram on 2 local Dask workers (wall, the cluster's start included, as in
 ``make bench``) and the same orbit diagram in this process (``scheduler="serial"``: wall and CPU,
 which a loaded machine distorts less), with the load average before each; the medians and their
-ratios.  On a machine shared with other jobs read the CPU ratio next to the wall ratio.
+ratios.  On a machine shared with other jobs read the CPU ratio next to the wall ratio.  It also
+times one linear solve of the compass gait's period-k shooting system (k = 8 … 64) dense and
+structured (:mod:`gaitopt.orbit.structured`).
 """
 
 from __future__ import annotations
@@ -237,6 +239,66 @@ def cascade(repeats: int = 3, workers: int = 2) -> dict[str, Any]:
     return out
 
 
+def structured_solves(ks=(8, 16, 32, 64), repeats: int = 20) -> dict[str, Any]:
+    """Median time of one Newton step's linear solve of the compass gait's period-k shooting
+    system at its repeated period-1 orbit (slope 0.0525), dense (LAPACK) vs on the block pattern
+    (:mod:`gaitopt.orbit.structured`, forced for every k), one BLAS thread; and the largest
+    difference of the two solutions relative to the solution."""
+    import gaitopt
+    from gaitopt.orbit import structured
+    from gaitopt.shooting import shooting_problem
+    from gaitopt.shooting.pattern import shooting_pattern
+    from gaitopt.threads import single_blas_thread
+
+    cycle = gaitopt.find_limit_cycle(gaitopt.model("compass_gait", slope=_SLOPES[0]))
+    one = cycle.problem
+    rows = []
+
+    def timed(f) -> float:
+        f()
+        times = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            f()
+            times.append(time.perf_counter() - t0)
+        return float(statistics.median(times))
+
+    @single_blas_thread
+    def measure(k: int) -> dict[str, Any]:
+        problem = shooting_problem(one.model_cls, one.disc, k)
+        s, nodes, durations = one.unpack(cycle.solution, cycle.model.p)
+        w = problem.pack(s, nodes * k, list(durations) * k)
+        ev = problem.evaluate(w, cycle.inputs, cycle.model.p)
+        J, F = ev.F_w, ev.F
+        pattern = shooting_pattern(problem)
+        threshold = structured.STRUCTURED_MIN_SIZE
+        structured.STRUCTURED_MIN_SIZE = 0
+        try:
+            x_sparse = structured.solve(J, F, pattern)
+            t_sparse = timed(lambda: structured.solve(J, F, pattern))
+        finally:
+            structured.STRUCTURED_MIN_SIZE = threshold
+        x_dense = np.linalg.solve(J, F)
+        return {
+            "k": k,
+            "unknowns": problem.size,
+            "pattern_nonzeros": pattern.nnz,
+            "dense_seconds": timed(lambda: np.linalg.solve(J, F)),
+            "structured_seconds": t_sparse,
+            "relative_difference": float(
+                np.max(np.abs(x_sparse - x_dense)) / np.max(np.abs(x_dense))
+            ),
+        }
+
+    for k in ks:
+        rows.append(measure(k))
+    return {
+        "threshold": structured.STRUCTURED_MIN_SIZE,
+        "load_1min": os.getloadavg()[0],
+        "rows": rows,
+    }
+
+
 def cascade_table(c: dict[str, Any]) -> str:
     return "\n".join(
         [
@@ -264,10 +326,20 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     from .common import _machine
 
-    record = {"machine": _machine(), "cascade": cascade(args.repeats, args.workers)}
+    record = {
+        "machine": _machine(),
+        "structured_solves": structured_solves(),
+        "cascade": cascade(args.repeats, args.workers),
+    }
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(record, indent=2) + "\n")
     print(cascade_table(record["cascade"]))
+    for r in record["structured_solves"]["rows"]:
+        print(
+            f"  period-{r['k']} solve ({r['unknowns']} unknowns): dense "
+            f"{1e3 * r['dense_seconds']:.3g} ms, structured {1e3 * r['structured_seconds']:.3g} ms"
+            f" (relative difference {r['relative_difference']:.1e})"
+        )
     print(f"Wrote {args.out}")
     return 0
 
