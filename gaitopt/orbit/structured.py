@@ -7,8 +7,8 @@ first node and, for the first stage's lift and the periodicity rows, the section
 Value Problems for ODEs", §4.3 on multiple shooting's block structure).  A dense LU costs
 ``O(k³)``; an LU that follows the pattern (SuperLU, :func:`scipy.sparse.linalg.splu`, with a
 COLAMD column order and partial pivoting) fills in only along the chain and the border, so its
-work and memory grow linearly in ``k`` (about 2.1× the pattern's nonzeros for the compass gait
-at k = 4 … 64).
+work and memory grow linearly in ``k`` (the compass gait's factors hold 1.32–1.39× the
+pattern's entries at k = 4 … 64, about 210 per step).
 
 Small systems stay dense: below :data:`STRUCTURED_MIN_SIZE` unknowns LAPACK's dense solve costs
 no more than gathering the pattern and factoring it (the compass gait's period-8 system has 135
@@ -25,9 +25,9 @@ import numpy as np
 __all__ = ["STRUCTURED_MIN_SIZE", "BlockPattern", "solve"]
 
 #: Systems with at least this many unknowns are solved on their pattern (sparse LU); smaller ones
-#: densely.  Measured per solve (one BLAS thread, 2-core machine under load): the compass gait's
-#: period-8 system (135 unknowns) 0.20 ms either way, period 12 (203) 0.44 ms dense vs 0.27 ms,
-#: period 16 (271) 1.0 vs 0.35 ms, period 64 (1087) 108 vs 2.0 ms; the kneed walker's period 8
+#: densely.  Measured per solve (one BLAS thread, 2-core machine under load; ``python -m
+#: bench.branches``): the compass gait's period-8 system (135 unknowns) 0.13 ms either way, period
+#: 16 (271) 0.79 ms dense vs 0.22 ms, period 32 (543) 11.9 vs 0.50 ms; the kneed walker's period 8
 #: (333) 2.0 vs 0.44 ms.  Below 200 every built-in period-1 system stays dense (the largest, the
 #: planar quadruped's, has 194 unknowns).
 STRUCTURED_MIN_SIZE = 200
