@@ -218,3 +218,40 @@ def test_switch_falls_back_to_simulated_starts(compass_branch, monkeypatch):
     assert child is not None and calls["simulated"] >= 1
     assert found[0].success and found[0].steps == 2 and born_at(found[0], pd.cycle)
     assert abs(found[0].model.slope - pd.param) <= 1e-3 * pd.param * (1 + 1e-12)
+
+
+def test_starts_dropped_before_the_certificate_would_not_have_been_born(monkeypatch):
+    # Source: the full path as the independent method: every Newton start of the compass gait's
+    # cascade (to period 8, slope 0.088) that switching.clearly_unborn drops is solved and certified anyway
+    # (solve_gait, with the independent simulation) and must not give an orbit born at the PD
+    # (born_at false or not a gait); at least one start is dropped (the period-8 switch finds
+    # period-8 orbits too far past the PD at its first offsets), and the cascade's doublings
+    # are the compass gait's (the slope study's values, located to 1e-10; 1e-9 here).
+    from gaitopt.continuation import switching
+    from gaitopt.shooting import solve_gait
+
+    dropped = []
+    original = switching.clearly_unborn
+
+    def recording(problem, w0, u, p, parent):
+        unborn = original(problem, w0, u, p, parent)
+        if unborn:
+            dropped.append((problem, np.array(w0), np.array(u), np.array(p), parent))
+        return unborn
+
+    monkeypatch.setattr(switching, "clearly_unborn", recording)
+    model = gaitopt.model("compass_gait", slope=0.0525)
+    branch = continuation(
+        model, "slope", to=0.088, max_period=8, options=PseudoArclength(max_step=0.05)
+    )
+    pds = sorted(
+        sp.param for b in branch.descendants() for sp in b.special_points if sp.kind == "PD"
+    )
+    expected = [0.07663563157614978, 0.08576647013295909, 0.08748354250318158, 0.08785071778447859]
+    np.testing.assert_allclose(pds, expected, rtol=0, atol=1e-9)
+    assert dropped
+    names = [spec.name for spec in model.parameter_specs()]
+    for problem, w0, u, p, parent in dropped:
+        at = parent.model.replace(slope=float(p[names.index("slope")]))
+        certified = solve_gait(at, problem, w0, u)
+        assert not (certified.success and switching.born_at(certified, parent))

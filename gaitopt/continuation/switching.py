@@ -22,6 +22,7 @@ import math
 import numpy as np
 
 from ..errors import GaitoptInputError, ParameterError
+from ..orbit.sensitivity import section_jacobians
 from ..result import LimitCycle
 from ..shooting import find_limit_cycle, shooting_problem, solve_gait
 from .branch import Branch, SpecialPoint
@@ -37,6 +38,10 @@ AMPLITUDES = (0.1, 0.03, 0.3, 1.0)
 #: Born at the PD: the new orbit's section point within this distance of the parent's (relative
 #: to ``1 + max |s|``) and a multiplier within this of +1.
 BORN_NEAR, BORN_MULTIPLIER = 0.05, 0.25
+#: A Newton start's orbit is dropped before its certificate when it misses one of the two
+#: conditions by more than this factor: the certificate's refined mesh moves the orbit by about
+#: its discretisation error (≤ 1e-8), far less, so the certified orbit would miss it too.
+UNBORN_MARGIN = 1 + 1e-3
 
 
 def doubled_unknowns(cycle: LimitCycle) -> tuple[object, np.ndarray, np.ndarray]:
@@ -56,6 +61,26 @@ def born_at(doubled: LimitCycle, parent: LimitCycle) -> bool:
     scale = 1 + np.max(np.abs(parent.section_point))
     near = np.max(np.abs(doubled.section_point - parent.section_point)) < BORN_NEAR * scale
     return bool(near and np.min(np.abs(doubled.multipliers - 1)) < BORN_MULTIPLIER)
+
+
+def clearly_unborn(problem, w0, u, p, parent: LimitCycle) -> bool:
+    """Whether Newton from ``w0`` (the solve :func:`solve_gait` starts with) converges to an
+    orbit that misses :func:`born_at` by more than :data:`UNBORN_MARGIN`, so that certifying and
+    simulating it (most of a candidate's cost) can be skipped.  False wherever that is not
+    certain (no convergence, a singular return map): then the full solve decides."""
+    solution = problem.solve(w0, u, p)
+    ev = solution.evaluation
+    if not solution.converged or ev is None or not np.all(np.isfinite(ev.F_w)):
+        return False
+    try:
+        A, _ = section_jacobians(problem.map_jacobian(ev.F_w), ev.F_u, problem.m, problem.n_g)
+        multipliers = np.linalg.eigvals(A)
+    except np.linalg.LinAlgError:
+        return False
+    scale = 1 + np.max(np.abs(parent.section_point))
+    distance = np.max(np.abs(problem.section_point(solution.w) - parent.section_point))
+    far = distance >= BORN_NEAR * scale * UNBORN_MARGIN
+    return bool(far or np.min(np.abs(multipliers - 1)) >= BORN_MULTIPLIER * UNBORN_MARGIN)
 
 
 def switch_at_period_doubling(
@@ -122,11 +147,11 @@ def switch_at_period_doubling(
                         if isinstance(doubled, str):
                             last = doubled
                             continue
-                        if doubled.success and born_at(doubled, cycle):
+                        if doubled is not UNBORN and doubled.success and born_at(doubled, cycle):
                             break
                         last = (
                             doubled.message
-                            if not doubled.success
+                            if doubled is not UNBORN and not doubled.success
                             else f"the period-{k2} orbit found at {param} = {lam:.10g} was not "
                             f"born at the PD (too far from the parent orbit, or no multiplier "
                             f"near +1)"
@@ -159,6 +184,10 @@ def switch_at_period_doubling(
     )
 
 
+#: What a Newton start yields when :func:`clearly_unborn` drops its orbit before the certificate.
+UNBORN = object()
+
+
 def _candidates(cycle, model, problem, w2, null, eps, u, verify, tol, simulated):
     """The period-2k orbits tried at one parameter value and amplitude ``eps`` (a generator, so
     the second is computed only if the first is not the orbit sought), each a
@@ -167,7 +196,8 @@ def _candidates(cycle, model, problem, w2, null, eps, u, verify, tol, simulated)
     Without ``simulated``: Newton from the doubled parent orbit plus ``eps`` times the null
     vector (the predictor of Allgower & Georg §8.1): no simulation, but the null vector's
     duration components can be far larger than its section ones (SLIP: tens of seconds per metre
-    of apex height), so this start may run backwards in time.
+    of apex height), so this start may run backwards in time.  An orbit that clearly was not born
+    at the PD is dropped before its certificate (:data:`UNBORN`, :func:`clearly_unborn`).
 
     With ``simulated``: the usual search from the section point displaced by ``±eps`` times the
     null vector's section part: its unknowns come from a simulation, so the durations are
@@ -177,7 +207,10 @@ def _candidates(cycle, model, problem, w2, null, eps, u, verify, tol, simulated)
     """
     if not simulated:
         try:
-            yield solve_gait(model, problem, w2 + eps * null, u, verify=verify, tol=tol)
+            if clearly_unborn(problem, w2 + eps * null, u, model.p, cycle):
+                yield UNBORN
+            else:  # the same start again, certified (its Newton runs once more: milliseconds)
+                yield solve_gait(model, problem, w2 + eps * null, u, verify=verify, tol=tol)
         except GaitoptInputError as exc:
             yield str(exc)
         return
