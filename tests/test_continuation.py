@@ -222,11 +222,11 @@ def test_switch_falls_back_to_simulated_starts(compass_branch, monkeypatch):
 
 def test_starts_dropped_before_the_certificate_would_not_have_been_born(monkeypatch):
     # Source: the full path as the independent method: every Newton start of the compass gait's
-    # cascade (to period 8, slope 0.088) that switching.clearly_unborn drops is solved and certified anyway
-    # (solve_gait, with the independent simulation) and must not give an orbit born at the PD
-    # (born_at false or not a gait); at least one start is dropped (the period-8 switch finds
-    # period-8 orbits too far past the PD at its first offsets), and the cascade's doublings
-    # are the compass gait's (the slope study's values, located to 1e-10; 1e-9 here).
+    # cascade (to period 8, slope 0.088) that switching.clearly_unborn drops is solved and
+    # certified anyway (solve_gait, with the independent simulation) and must not give an orbit
+    # born at the PD (born_at false or not a gait); at least one start is dropped (the period-8
+    # switch finds period-8 orbits too far past the PD at its first offset), and the cascade's
+    # doublings are the compass gait's (the slope study's values, located to 1e-10; 1e-9 here).
     from gaitopt.continuation import switching
     from gaitopt.shooting import solve_gait
 
