@@ -27,8 +27,8 @@ __all__ = ["STRUCTURED_MIN_SIZE", "BlockPattern", "solve"]
 #: Systems with at least this many unknowns are solved on their pattern (sparse LU); smaller ones
 #: densely.  Measured per solve (one BLAS thread, 2-core machine under load; ``python -m
 #: bench.branches``, ``results/bench_cascade.json``): the compass gait's period-8 system (135
-#: unknowns) 0.13 ms either way, period 16 (271) 0.79 ms dense vs 0.23 ms, period 32 (543) 14 vs
-#: 0.56 ms; the kneed walker's period 8 (333) 2.0 vs 0.44 ms.  Below 200 every built-in
+#: unknowns) 0.21 ms either way, period 16 (271) 1.26 ms dense vs 0.40 ms, period 32 (543) 13.7 vs
+#: 0.88 ms; the kneed walker's period 8 (333) 2.0 vs 0.44 ms.  Below 200 every built-in
 #: period-1 system stays dense (the largest, the planar quadruped's, has 194 unknowns).
 STRUCTURED_MIN_SIZE = 200
 
