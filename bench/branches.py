@@ -9,11 +9,26 @@
   period doubling (the orbit diagram only to its resolution, and biased by the slow transients
   near the bifurcation, where the multiplier is close to −1);
 * **sweep throughput** with 1 and 2 local Dask workers (and serially).
+
+Run alone, ``python -m bench.branches [--repeats N] [--out FILE]`` repeats the slope study only
+(default 3 times, ``results/bench_cascade.json``): each repeat times the continuation (wall and
+CPU), the orbit diagram on 2 local Dask workers (wall, the cluster's start included, as in
+``make bench``) and the same orbit diagram in this process (``scheduler="serial"``: wall and CPU,
+which a loaded machine distorts less), with the load average before each; the medians and their
+ratios.  On a machine shared with other jobs read the CPU ratio next to the wall ratio.  It also
+times one linear solve of the compass gait's period-k shooting system (k = 8 … 64) dense and
+structured (:mod:`gaitopt.orbit.structured`).
 """
 
 from __future__ import annotations
 
+import argparse
+import json
+import os
+import statistics
+import sys
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -56,11 +71,11 @@ def _branch_rate() -> dict[str, Any]:
 def _slope_study(quick: bool, workers: int, scheduler: str | None) -> dict[str, Any]:
     model = make_model("compass_gait", slope=_SLOPES[0])
     max_period = 4 if quick else 8
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     branch = continuation(
         model, "slope", to=_SLOPES[1], max_period=max_period, options=PseudoArclength(max_step=0.05)
     )
-    t_continuation = time.perf_counter() - t0
+    t_continuation, c_continuation = time.perf_counter() - t0, time.process_time() - c0
     pds = sorted(
         sp.param for b in branch.descendants() for sp in b.special_points if sp.kind == "PD"
     )
@@ -84,7 +99,7 @@ def _slope_study(quick: bool, workers: int, scheduler: str | None) -> dict[str, 
         }
         for s in slopes
     ]
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     brute = sweep(
         simulate_task,
         points,
@@ -93,7 +108,7 @@ def _slope_study(quick: bool, workers: int, scheduler: str | None) -> dict[str, 
         progress=False,
         description="orbit diagram",
     )
-    t_brute = time.perf_counter() - t0
+    t_brute, c_brute = time.perf_counter() - t0, time.process_time() - c0
     # First slope where the settled states take two or more distinct values.
     stance = model.state_names.index("stance")
     doubled = [
@@ -104,10 +119,12 @@ def _slope_study(quick: bool, workers: int, scheduler: str | None) -> dict[str, 
     brute_pd = float(doubled[0]) if doubled else float("nan")
     return {
         "continuation_seconds": t_continuation,
+        "continuation_cpu_seconds": c_continuation,
         "continuation_gaits": sum(len(b.cycles) for b in branch.descendants()),
         "period_doublings": pds,
         "first_pd_continuation": first_pd,
         "orbit_diagram_seconds": t_brute,
+        "orbit_diagram_cpu_seconds_in_process": c_brute,  # the serial scheduler's only
         "orbit_diagram_slopes": len(slopes),
         "orbit_diagram_resolution": resolution,
         "orbit_diagram_steps_per_slope": steps,
@@ -164,5 +181,168 @@ def table(result: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def cascade(repeats: int = 3, workers: int = 2) -> dict[str, Any]:
+    """The slope study ``repeats`` times: continuation, orbit diagram on ``workers`` Dask
+    workers, orbit diagram serially in this process; medians and ratios (see the module
+    docstring)."""
+    runs = []
+    for _ in range(repeats):
+        load = os.getloadavg()[0]
+        dask = _slope_study(False, workers, None)
+        serial = _slope_study(False, workers, "serial")
+        runs.append(
+            {
+                "load_1min_before": load,
+                "continuation_seconds": [
+                    dask["continuation_seconds"],
+                    serial["continuation_seconds"],
+                ],
+                "continuation_cpu_seconds": [
+                    dask["continuation_cpu_seconds"],
+                    serial["continuation_cpu_seconds"],
+                ],
+                "orbit_diagram_dask_seconds": dask["orbit_diagram_seconds"],
+                "orbit_diagram_serial_seconds": serial["orbit_diagram_seconds"],
+                "orbit_diagram_serial_cpu_seconds": serial["orbit_diagram_cpu_seconds_in_process"],
+                "period_doublings": dask["period_doublings"],
+            }
+        )
+
+    def median(key: str) -> float:
+        values = [v for r in runs for v in np.atleast_1d(r[key])]
+        return float(statistics.median(values))
+
+    out = {
+        "repeats": repeats,
+        "workers": workers,
+        "orbit_diagram_slopes": dask["orbit_diagram_slopes"],
+        "orbit_diagram_steps_per_slope": dask["orbit_diagram_steps_per_slope"],
+        "continuation_gaits": dask["continuation_gaits"],
+        "period_doublings": dask["period_doublings"],
+        "load_1min": [r["load_1min_before"] for r in runs],
+        "runs": runs,
+    }
+    for key in (
+        "continuation_seconds",
+        "continuation_cpu_seconds",
+        "orbit_diagram_dask_seconds",
+        "orbit_diagram_serial_seconds",
+        "orbit_diagram_serial_cpu_seconds",
+    ):
+        out[f"median_{key}"] = median(key)
+    out["speedup_wall_dask"] = (
+        out["median_orbit_diagram_dask_seconds"] / out["median_continuation_seconds"]
+    )
+    out["speedup_cpu_serial"] = (
+        out["median_orbit_diagram_serial_cpu_seconds"] / out["median_continuation_cpu_seconds"]
+    )
+    return out
+
+
+def structured_solves(ks=(8, 16, 32, 64), repeats: int = 20) -> dict[str, Any]:
+    """Median time of one Newton step's linear solve of the compass gait's period-k shooting
+    system at its repeated period-1 orbit (slope 0.0525), dense (LAPACK) vs on the block pattern
+    (:mod:`gaitopt.orbit.structured`, forced for every k), one BLAS thread; and the largest
+    difference of the two solutions relative to the solution."""
+    import gaitopt
+    from gaitopt.orbit import structured
+    from gaitopt.shooting import shooting_problem
+    from gaitopt.shooting.pattern import shooting_pattern
+    from gaitopt.threads import single_blas_thread
+
+    cycle = gaitopt.find_limit_cycle(gaitopt.model("compass_gait", slope=_SLOPES[0]))
+    one = cycle.problem
+    rows = []
+
+    def timed(f) -> float:
+        f()
+        times = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            f()
+            times.append(time.perf_counter() - t0)
+        return float(statistics.median(times))
+
+    @single_blas_thread
+    def measure(k: int) -> dict[str, Any]:
+        problem = shooting_problem(one.model_cls, one.disc, k)
+        s, nodes, durations = one.unpack(cycle.solution, cycle.model.p)
+        w = problem.pack(s, nodes * k, list(durations) * k)
+        ev = problem.evaluate(w, cycle.inputs, cycle.model.p)
+        J, F = ev.F_w, ev.F
+        pattern = shooting_pattern(problem)
+        threshold = structured.STRUCTURED_MIN_SIZE
+        structured.STRUCTURED_MIN_SIZE = 0
+        try:
+            x_sparse = structured.solve(J, F, pattern)
+            t_sparse = timed(lambda: structured.solve(J, F, pattern))
+        finally:
+            structured.STRUCTURED_MIN_SIZE = threshold
+        x_dense = np.linalg.solve(J, F)
+        return {
+            "k": k,
+            "unknowns": problem.size,
+            "pattern_nonzeros": pattern.nnz,
+            "dense_seconds": timed(lambda: np.linalg.solve(J, F)),
+            "structured_seconds": t_sparse,
+            "relative_difference": float(
+                np.max(np.abs(x_sparse - x_dense)) / np.max(np.abs(x_dense))
+            ),
+        }
+
+    for k in ks:
+        rows.append(measure(k))
+    return {
+        "threshold": structured.STRUCTURED_MIN_SIZE,
+        "load_1min": os.getloadavg()[0],
+        "rows": rows,
+    }
+
+
+def cascade_table(c: dict[str, Any]) -> str:
+    return "\n".join(
+        [
+            f"compass cascade (continuation to period 8, {c['continuation_gaits']} gaits) vs orbit "
+            f"diagram ({c['orbit_diagram_slopes']} slopes × {c['orbit_diagram_steps_per_slope']} "
+            f"steps), medians of {c['repeats']} (load {min(c['load_1min']):.1f}–"
+            f"{max(c['load_1min']):.1f}):",
+            f"  continuation {c['median_continuation_seconds']:.2f} s wall, "
+            f"{c['median_continuation_cpu_seconds']:.2f} s CPU",
+            f"  orbit diagram on {c['workers']} Dask workers "
+            f"{c['median_orbit_diagram_dask_seconds']:.2f} s wall: {c['speedup_wall_dask']:.2f}× "
+            f"(goal ≥ 20×)",
+            f"  orbit diagram serially {c['median_orbit_diagram_serial_seconds']:.2f} s wall, "
+            f"{c['median_orbit_diagram_serial_cpu_seconds']:.2f} s CPU: "
+            f"{c['speedup_cpu_serial']:.2f}× in CPU",
+        ]
+    )
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m bench.branches", description=__doc__)
+    parser.add_argument("--repeats", type=int, default=3, help="repeats of the slope study")
+    parser.add_argument("--workers", type=int, default=2, help="local Dask workers")
+    parser.add_argument("--out", type=Path, default=Path("results/bench_cascade.json"))
+    args = parser.parse_args(argv)
+    from .common import _machine
+
+    record = {
+        "machine": _machine(),
+        "structured_solves": structured_solves(),
+        "cascade": cascade(args.repeats, args.workers),
+    }
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(record, indent=2) + "\n")
+    print(cascade_table(record["cascade"]))
+    for r in record["structured_solves"]["rows"]:
+        print(
+            f"  period-{r['k']} solve ({r['unknowns']} unknowns): dense "
+            f"{1e3 * r['dense_seconds']:.3g} ms, structured {1e3 * r['structured_seconds']:.3g} ms"
+            f" (relative difference {r['relative_difference']:.1e})"
+        )
+    print(f"Wrote {args.out}")
+    return 0
+
+
 if __name__ == "__main__":
-    print(table(run()))
+    sys.exit(main())

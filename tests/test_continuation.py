@@ -160,3 +160,98 @@ def test_slip_fold_in_touchdown_angle_is_where_two_apex_fixed_points_meet():
         near = model.replace(touchdown_angle=lp + offset)
         found = fixed_points_1d(near, (0.86, 0.95), samples=40)
         assert len(found.cycles) == expected, (offset, found.points)
+
+
+def _switch(compass_branch, monkeypatch, *, newton_fails: bool):
+    """Switch at the compass gait's first PD with the continuation's follower replaced by one
+    that keeps the period-2 orbit found; counts the simulated starts (find_limit_cycle)."""
+    from gaitopt.continuation import switching
+
+    calls = {"simulated": 0}
+    original = switching.find_limit_cycle
+
+    def counted(*args, **kwargs):
+        calls["simulated"] += 1
+        return original(*args, **kwargs)
+
+    def refused(*args, **kwargs):
+        raise GaitoptInputError("refused on purpose: the simulated starts must find it")
+
+    monkeypatch.setattr(switching, "find_limit_cycle", counted)
+    if newton_fails:
+        monkeypatch.setattr(switching, "solve_gait", refused)
+    found = []
+
+    def follow(doubled, *args):
+        found.append(doubled)
+        return type(compass_branch)(doubled.model, "slope", doubled.steps)
+
+    [pd] = [sp for sp in compass_branch.special_points if sp.kind == "PD"]
+    child, note = switching.switch_at_period_doubling(
+        pd, "slope", 1.0, 0.0805, (-math.inf, math.inf), PseudoArclength(), False, 1e-10, 2,
+        follow=follow,
+    )  # fmt: skip
+    return pd, child, note, found, calls
+
+
+def test_switch_tries_newton_from_the_doubled_orbit_before_simulating(compass_branch, monkeypatch):
+    # Source: the switch's documented order (switching module docstring): Newton from the doubled
+    # orbit plus ε·null vector at every offset and amplitude before any simulated start.  At the
+    # compass gait's first PD the first Newton start finds the period-2 orbit born there (the
+    # born_at test: within 5 % of the parent, a multiplier within 0.25 of +1), so no simulation
+    # runs (exact count).
+    from gaitopt.continuation.switching import born_at
+
+    pd, child, note, found, calls = _switch(compass_branch, monkeypatch, newton_fails=False)
+    assert child is not None and note.startswith("period-2 branch followed")
+    assert calls["simulated"] == 0
+    assert found[0].success and found[0].steps == 2 and born_at(found[0], pd.cycle)
+
+
+def test_switch_falls_back_to_simulated_starts(compass_branch, monkeypatch):
+    # Source: the same switch with every Newton start refused: the simulated starts (from the
+    # section point displaced along the null vector) must find an orbit born at the PD, within
+    # 1e-3 relative of the PD in the slope (the largest offset, OFFSETS[0] tried first).
+    from gaitopt.continuation.switching import born_at
+
+    pd, child, note, found, calls = _switch(compass_branch, monkeypatch, newton_fails=True)
+    assert child is not None and calls["simulated"] >= 1
+    assert found[0].success and found[0].steps == 2 and born_at(found[0], pd.cycle)
+    assert abs(found[0].model.slope - pd.param) <= 1e-3 * pd.param * (1 + 1e-12)
+
+
+def test_starts_dropped_before_the_certificate_would_not_have_been_born(monkeypatch):
+    # Source: the full path as the independent method: every Newton start of the compass gait's
+    # cascade (to period 8, slope 0.088) that switching.clearly_unborn drops is solved and
+    # certified anyway (solve_gait, with the independent simulation) and must not give an orbit
+    # born at the PD (born_at false or not a gait); at least one start is dropped (the period-8
+    # switch finds period-8 orbits too far past the PD at its first offset), and the cascade's
+    # doublings are the compass gait's (the slope study's values, located to 1e-10; 1e-9 here).
+    from gaitopt.continuation import switching
+    from gaitopt.shooting import solve_gait
+
+    dropped = []
+    original = switching.clearly_unborn
+
+    def recording(problem, w0, u, p, parent):
+        unborn = original(problem, w0, u, p, parent)
+        if unborn:
+            dropped.append((problem, np.array(w0), np.array(u), np.array(p), parent))
+        return unborn
+
+    monkeypatch.setattr(switching, "clearly_unborn", recording)
+    model = gaitopt.model("compass_gait", slope=0.0525)
+    branch = continuation(
+        model, "slope", to=0.088, max_period=8, options=PseudoArclength(max_step=0.05)
+    )
+    pds = sorted(
+        sp.param for b in branch.descendants() for sp in b.special_points if sp.kind == "PD"
+    )
+    expected = [0.07663563157614978, 0.08576647013295909, 0.08748354250318158, 0.08785071778447859]
+    np.testing.assert_allclose(pds, expected, rtol=0, atol=1e-9)
+    assert dropped
+    names = [spec.name for spec in model.parameter_specs()]
+    for problem, w0, u, p, parent in dropped:
+        at = parent.model.replace(slope=float(p[names.index("slope")]))
+        certified = solve_gait(at, problem, w0, u)
+        assert not (certified.success and switching.born_at(certified, parent))

@@ -10,8 +10,10 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..hybrid import HybridModel
+from ..orbit import structured
 from ..result import LimitCycle
 from ..shooting import MultipleShooting, ShootingProblem, certify, shooting_problem
+from ..shooting.pattern import pattern_of
 from ..stability import section_jacobians
 from .branch import SpecialPoint
 from .special import SpecialPoints, test_functions
@@ -104,7 +106,7 @@ class Follower(SpecialPoints):
         K = np.vstack([J, previous * W])
         rhs = np.zeros(K.shape[0])
         rhs[-1] = 1.0
-        t = np.linalg.solve(K, rhs)
+        t = self._solve_bordered(K, rhs)
         t /= math.sqrt(float(t @ (W * t)))
         return t if float(t @ (W * previous)) > 0 else -t
 
@@ -118,13 +120,20 @@ class Follower(SpecialPoints):
             if not np.all(np.isfinite(F)):
                 return y, False, k
             G = np.concatenate([F, [float(t @ (W * (y - y_pred)))]])
-            dy = np.linalg.solve(np.vstack([J, t * W]), -G)
+            dy = self._solve_bordered(np.vstack([J, t * W]), -G)
             y = y + dy
             F, J = self.jacobian(y)
             small = np.max(np.abs(dy)) < 1e-9 * (1 + np.max(np.abs(y)))
             if small and np.max(np.abs(F)) <= self.tol:
                 return y, True, k
         return y, False, self.options.max_corrector
+
+    def _solve_bordered(self, K: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        """``K⁻¹ rhs`` for ``K = [[F_w, F_ℓ], [rowᵀ]]``: on the shooting Jacobian's block
+        pattern bordered by the parameter's column and the arclength row where the system is
+        large (period-k orbits, :mod:`gaitopt.orbit.structured`), densely otherwise."""
+        pattern = pattern_of(self.problem)
+        return structured.solve(K, rhs, None if pattern is None else pattern.bordered())
 
     # -- a point on the branch ---------------------------------------------------------------
     def model_at(self, y: np.ndarray) -> HybridModel | None:
@@ -193,7 +202,8 @@ class Follower(SpecialPoints):
     def _discretisation_error(self, y: np.ndarray) -> float:
         F_fine = self.problem.fine_residual(y[:-1], self._u(y), self._p(y))
         F_w = self._evaluate(y).F_w
-        return float(np.max(np.abs(np.linalg.solve(F_w, F_fine))))
+        step = structured.solve(F_w, F_fine, pattern_of(self.problem))
+        return float(np.max(np.abs(step)))
 
     # -- the loop ----------------------------------------------------------------------------
     def run(self) -> Follower:

@@ -9,7 +9,10 @@ plus ``ε`` times that null vector, with ``ε ∝ sqrt(|λ − λ_PD|)`` (the am
 period-doubled orbit grows as the square root of the distance from the PD): no simulation, and
 every candidate is kept only if it was born at the PD (next to the parent orbit, with the
 multiplier +1 into which the parent's −1 squares), so that an unrelated period-2k orbit nearby is
-never mistaken for the new branch.
+never mistaken for the new branch.  These Newton starts are tried at every parameter offset and
+amplitude before any start that simulates from a displaced section point (the fallback): a
+simulated start that leads to no orbit costs a whole line search stalled next to a minimum of
+``‖F‖`` that is no root, which was most of the compass gait's cascade time.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import math
 import numpy as np
 
 from ..errors import GaitoptInputError, ParameterError
+from ..orbit.sensitivity import section_jacobians
 from ..result import LimitCycle
 from ..shooting import find_limit_cycle, shooting_problem, solve_gait
 from .branch import Branch, SpecialPoint
@@ -34,6 +38,10 @@ AMPLITUDES = (0.1, 0.03, 0.3, 1.0)
 #: Born at the PD: the new orbit's section point within this distance of the parent's (relative
 #: to ``1 + max |s|``) and a multiplier within this of +1.
 BORN_NEAR, BORN_MULTIPLIER = 0.05, 0.25
+#: A Newton start's orbit is dropped before its certificate when it misses one of the two
+#: conditions by more than this factor: the certificate's refined mesh moves the orbit by about
+#: its discretisation error (≤ 1e-8), far less, so the certified orbit would miss it too.
+UNBORN_MARGIN = 1 + 1e-3
 
 
 def doubled_unknowns(cycle: LimitCycle) -> tuple[object, np.ndarray, np.ndarray]:
@@ -53,6 +61,26 @@ def born_at(doubled: LimitCycle, parent: LimitCycle) -> bool:
     scale = 1 + np.max(np.abs(parent.section_point))
     near = np.max(np.abs(doubled.section_point - parent.section_point)) < BORN_NEAR * scale
     return bool(near and np.min(np.abs(doubled.multipliers - 1)) < BORN_MULTIPLIER)
+
+
+def clearly_unborn(problem, w0, u, p, parent: LimitCycle) -> bool:
+    """Whether Newton from ``w0`` (the solve :func:`solve_gait` starts with) converges to an
+    orbit that misses :func:`born_at` by more than :data:`UNBORN_MARGIN`, so that certifying and
+    simulating it (most of a candidate's cost) can be skipped.  False wherever that is not
+    certain (no convergence, a singular return map): then the full solve decides."""
+    solution = problem.solve(w0, u, p)
+    ev = solution.evaluation
+    if not solution.converged or ev is None or not np.all(np.isfinite(ev.F_w)):
+        return False
+    try:
+        A, _ = section_jacobians(problem.map_jacobian(ev.F_w), ev.F_u, problem.m, problem.n_g)
+        multipliers = np.linalg.eigvals(A)
+    except np.linalg.LinAlgError:
+        return False
+    scale = 1 + np.max(np.abs(parent.section_point))
+    distance = np.max(np.abs(problem.section_point(solution.w) - parent.section_point))
+    far = distance >= BORN_NEAR * scale * UNBORN_MARGIN
+    return bool(far or np.min(np.abs(multipliers - 1)) >= BORN_MULTIPLIER * UNBORN_MARGIN)
 
 
 def switch_at_period_doubling(
@@ -91,6 +119,7 @@ def switch_at_period_doubling(
     lam_pd = sp.param
     tried, last = 0, "no parameter value next to the PD lies in the allowed range"
     for side in (direction, -direction):
+        starts = []  # (offset, parameter value, model, input) on this side
         for offset in OFFSETS:
             lam = lam_pd + side * offset * max(abs(lam_pd), 1e-3)
             if to is not None and side == direction and (lam - to) * direction > 0:
@@ -103,40 +132,49 @@ def switch_at_period_doubling(
                 continue
             # A model whose nominal input is set by the parameter (SLIP) keeps it nominal.
             u = model.nominal_input() if nominal else np.asarray(cycle.inputs, dtype=float)
-            for amplitude in AMPLITUDES:
-                eps = amplitude * math.sqrt(offset)
-                for doubled in _candidates(cycle, model, problem, w2, null, eps, u, verify, tol):
-                    tried += 1
-                    if isinstance(doubled, str):
-                        last = doubled
-                        continue
-                    if doubled.success and born_at(doubled, cycle):
-                        break
-                    last = (
-                        doubled.message
-                        if not doubled.success
-                        else f"the period-{k2} orbit found at {param} = {lam:.10g} was not born "
-                        f"at the PD (too far from the parent orbit, or no multiplier near +1)"
+            starts.append((offset, lam, model, u))
+        # Newton from the doubled orbit first at every offset and amplitude (no simulation),
+        # then the simulated starts (see _candidates).
+        for simulated in (False, True):
+            for offset, lam, model, u in starts:
+                for amplitude in AMPLITUDES:
+                    eps = amplitude * math.sqrt(offset)
+                    candidates = _candidates(
+                        cycle, model, problem, w2, null, eps, u, verify, tol, simulated
                     )
-                else:
-                    continue
-                child = follow(
-                    doubled,
-                    param,
-                    side,
-                    to if side == direction else None,
-                    bounds,
-                    options,
-                    False,
-                    True,
-                    max_period,
-                    verify,
-                    tol,
-                )
-                return child, (
-                    f"period-{k2} branch followed from {param} = {lam:.10g} "
-                    f"({len(child.cycles)} gaits)"
-                )
+                    for doubled in candidates:
+                        tried += 1
+                        if isinstance(doubled, str):
+                            last = doubled
+                            continue
+                        if doubled is not UNBORN and doubled.success and born_at(doubled, cycle):
+                            break
+                        last = (
+                            doubled.message
+                            if doubled is not UNBORN and not doubled.success
+                            else f"the period-{k2} orbit found at {param} = {lam:.10g} was not "
+                            f"born at the PD (too far from the parent orbit, or no multiplier "
+                            f"near +1)"
+                        )
+                    else:
+                        continue
+                    child = follow(
+                        doubled,
+                        param,
+                        side,
+                        to if side == direction else None,
+                        bounds,
+                        options,
+                        False,
+                        True,
+                        max_period,
+                        verify,
+                        tol,
+                    )
+                    return child, (
+                        f"period-{k2} branch followed from {param} = {lam:.10g} "
+                        f"({len(child.cycles)} gaits)"
+                    )
     return None, (
         f"no period-{k2} branch found: {tried} starts along the PD's null vector (Newton from "
         f"the doubled orbit, and simulations from the displaced section point; parameter offsets "
@@ -146,21 +184,36 @@ def switch_at_period_doubling(
     )
 
 
-def _candidates(cycle, model, problem, w2, null, eps, u, verify, tol):
+#: What a Newton start yields when :func:`clearly_unborn` drops its orbit before the certificate.
+UNBORN = object()
+
+
+def _candidates(cycle, model, problem, w2, null, eps, u, verify, tol, simulated):
     """The period-2k orbits tried at one parameter value and amplitude ``eps`` (a generator, so
     the second is computed only if the first is not the orbit sought), each a
     :class:`LimitCycle` or, where the start is refused, the reason as a string.
 
-    1. Newton from the doubled parent orbit plus ``eps`` times the null vector: no simulation,
-       but the null vector's duration components can be far larger than its section ones (SLIP:
-       tens of seconds per metre of apex height), so this start may run backwards in time.
-    2. The usual search from the section point displaced by ``±eps`` times the null vector's
-       section part: its unknowns come from a simulation, so the durations are consistent.
+    Without ``simulated``: Newton from the doubled parent orbit plus ``eps`` times the null
+    vector (the predictor of Allgower & Georg §8.1): no simulation, but the null vector's
+    duration components can be far larger than its section ones (SLIP: tens of seconds per metre
+    of apex height), so this start may run backwards in time.  An orbit that clearly was not born
+    at the PD is dropped before its certificate (:data:`UNBORN`, :func:`clearly_unborn`).
+
+    With ``simulated``: the usual search from the section point displaced by ``±eps`` times the
+    null vector's section part: its unknowns come from a simulation, so the durations are
+    consistent.  These are the fallback: tried only after the Newton starts failed at every
+    offset and amplitude, because a start that leads to no orbit costs a whole line search (up
+    to 100 iterations stalled next to a minimum of ``‖F‖`` that is no root).
     """
-    try:
-        yield solve_gait(model, problem, w2 + eps * null, u, verify=verify, tol=tol)
-    except GaitoptInputError as exc:
-        yield str(exc)
+    if not simulated:
+        try:
+            if clearly_unborn(problem, w2 + eps * null, u, model.p, cycle):
+                yield UNBORN
+            else:  # the same start again, certified (its Newton runs once more: milliseconds)
+                yield solve_gait(model, problem, w2 + eps * null, u, verify=verify, tol=tol)
+        except GaitoptInputError as exc:
+            yield str(exc)
+        return
     m = len(cycle.section_point)
     for sign in (1.0, -1.0):  # the orbit visits both sides; one may leave the map's domain
         shifted = cycle.section_point + sign * eps * null[:m]

@@ -42,6 +42,7 @@ def newton(
     abstol: float = ABSTOL,
     abstol_step: float = ABSTOL_STEP,
     residual: Callable[[np.ndarray], Any] | None = None,
+    linear_solve: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
 ) -> tuple[np.ndarray, bool, int, Any]:
     """Newton on ``F(w) = 0``: each iteration one call ``evaluate(w)`` (with ``F`` and ``F_w``),
     a dense solve (least squares where ``F_w`` is exactly singular) and, with ``line_search``,
@@ -52,6 +53,10 @@ def newton(
     for the line search's trial points; the accepted one is then evaluated by ``evaluate``.
     Near a local minimum of ``‖F‖₂`` (no orbit) each iteration halves the step ~14 times, and
     those trials need no Jacobian.
+
+    ``linear_solve(F_w, F)``, where given, solves for the step instead of
+    :func:`numpy.linalg.solve` (the shooting's structured solve for period-k orbits,
+    :mod:`gaitopt.orbit.structured`); it raises :class:`numpy.linalg.LinAlgError` likewise.
 
     Returns
     -------
@@ -69,7 +74,7 @@ def newton(
         if float(np.max(np.abs(F))) <= abstol:
             return w, True, iteration, ev
         try:
-            step = np.linalg.solve(ev.F_w, F)
+            step = (linear_solve or np.linalg.solve)(ev.F_w, F)
         except np.linalg.LinAlgError:  # exactly singular (a family of orbits): least squares
             step = np.linalg.lstsq(ev.F_w, F, rcond=None)[0]
         if float(np.max(np.abs(step))) <= abstol_step:

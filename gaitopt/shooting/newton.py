@@ -13,7 +13,9 @@ import casadi as ca
 import numpy as np
 
 from ..errors import GaitoptInputError
+from ..orbit import structured
 from ..orbit.newton import newton as _orbit_newton
+from .pattern import pattern_of
 from .symbolic import NEWTON_OPTIONS
 
 __all__ = ["METHODS", "Solution", "newton", "solve"]
@@ -96,7 +98,9 @@ def solve(problem: ShootingSystem, w0, u, p, *, method="newton", objective=None,
 
 def newton(problem: ShootingSystem, w0, u, p, *, line_search: bool = False):
     """Newton on the compiled shooting system (:func:`gaitopt.orbit.newton.newton`: each
-    iteration one compiled call for ``F`` and ``∂F/∂w``, a dense solve, and with
+    iteration one compiled call for ``F`` and ``∂F/∂w``, a solve (on the Jacobian's block pattern
+    for period-k systems of :data:`gaitopt.orbit.structured.STRUCTURED_MIN_SIZE` unknowns or
+    more, :mod:`gaitopt.shooting.pattern`; dense below), and with
     ``line_search`` halving the step until ``‖F‖₂`` decreases).  Stops where
     ``max |F| ≤ 1e-12`` or ``max |step| ≤ 1e-15``; 30 iterations (100 with line search).
 
@@ -106,11 +110,13 @@ def newton(problem: ShootingSystem, w0, u, p, *, line_search: bool = False):
     the number of Jacobians evaluated and the evaluation at ``w`` (reused by the caller).
     """
     asm = problem.assembly()
+    pattern = pattern_of(problem)  # None below the structured solve's size: dense steps
     return _orbit_newton(
         lambda w: asm(w, u, p), w0, line_search=line_search,
         max_iter=NEWTON_OPTIONS["max_iter"], abstol=NEWTON_OPTIONS["abstol"],
         abstol_step=NEWTON_OPTIONS["abstolStep"],
         residual=lambda w: asm(w, u, p, jacobian=False),
+        linear_solve=None if pattern is None else lambda J, F: structured.solve(J, F, pattern),
     )  # fmt: skip
 
 
