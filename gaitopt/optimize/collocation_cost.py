@@ -45,7 +45,7 @@ def cost_rows(col: Any, add: Any, v: Any, terms: Any, k: int, i: int, ph: Any) -
         if structure is not None and any(any(a.bounds) for x in structure for a in x):
             bound_arcs(col, k, Xk, Uk, p, label, add)  # the arcs of input bounds
         if structure is not None:  # touch points of state bounds and limits
-            touch_rows(col, k, i, Xk, Uk, p, label, add)
+            touch_rows(col, k, i, Xk, Uk, p, label, add, (v.T, ph.hs))
         L = ca.vertcat(*[problem.integrand(i, Xc[:, c], Uk[:, c], p) for c in range(N * d)])
         terms.cost.append(hq * ca.mtimes(L.T, wq))
 
@@ -159,7 +159,7 @@ def _work_arc_rows(
         braking = (node_kinds == NEGATIVE) & np.repeat(signed, d, axis=1)
         terms.brake.append(ca.mtimes(ca.sum1(ca.DM(braking.astype(float)) * Uk**2), wq))
     terms.work.append(problem.impulse_work(i, x_end, u_end, p))
-    touch_rows(col, k, i, Xk, Uk, p, label, add)  # guards' touch points, if cut
+    touch_rows(col, k, i, Xk, Uk, p, label, add, (v.T, ph.hs))  # guards' touches, if cut
 
 
 def bound_arcs(col: Any, k: int, Xk: Any, Uk: Any, p: Any, label: str, add: Any) -> None:
