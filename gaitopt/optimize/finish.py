@@ -21,6 +21,7 @@ from .attempt import (
     _converged,
     _run,
 )
+from .boundary_arcs import held_on_guard
 from .certify import _certify
 from .collapsed import move_collapsed_arcs, warm_start
 from .collocation import Collocation, RadauMesh
@@ -60,7 +61,8 @@ def finish(
         w_slack, stats_slack = _run(slack_fine, slack_fine.from_solution(col, w, p), p)
         if _converged(stats_slack):
             col, w = slack_fine, w_slack
-        structure = detect_structure(col, w, p)
+        # Held arcs on a guard (the kneed walker's knee held straight) are boundary arcs.
+        structure = held_on_guard(col, w, p, detect_structure(col, w, p))
         exact = _collocation(
             problem,
             RadauMesh(sum(a.intervals for a in structure[0]), col.d),
