@@ -43,7 +43,13 @@ from ..hybrid import rate_along
 from .radau import BOUNDARY, HELD, Arc
 from .state_arcs import ACTIVE_TOL, guard_functions
 
-__all__ = ["boundary_nodes", "boundary_rows", "guard_rate_input", "held_on_guard"]
+__all__ = [
+    "boundary_nodes",
+    "boundary_rows",
+    "boundary_spans",
+    "guard_rate_input",
+    "held_on_guard",
+]
 
 #: Samples inside each held arc at which a first solution's guard side is read.
 SAMPLES = 9
@@ -177,3 +183,30 @@ def boundary_rows(col: Any, add: Any, k: int, i: int, Xk: Any, Uk: Any, p: Any, 
             rows.append(fn(x, u, p))
     if rows:
         add(f"boundary arc of the guard: entry on the guard ({label})", ca.vertcat(*rows))
+
+
+def boundary_spans(col: Any, w: np.ndarray, p: np.ndarray) -> list[str]:
+    """The boundary arcs of a solved transcription with their times (s since the section):
+    ``"knee_torque holds the 'knee strike' guard on [0, 0.0473] s"``; empty without one."""
+    if col.structure is None:
+        return []
+    sol = col.unpack(w, p)
+    out, t0 = [], 0.0
+    for k, arcs in enumerate(col.structure):
+        edges = t0 + sol["T"][k] * np.concatenate([[0.0], np.cumsum(col.theta_of(w, k))])
+        name = col.model.phases[col.chain[k]].transitions[0].name
+        spans: list[list[float]] = []
+        for a, arc in enumerate(arcs):
+            if BOUNDARY not in arc.signs:
+                continue
+            if spans and spans[-1][1] == a:  # continues the previous boundary arc
+                spans[-1][1:] = [a + 1, spans[-1][2]]
+            else:
+                spans.append([a, a + 1, arc.signs.index(BOUNDARY)])
+        for first, last, r in spans:
+            out.append(
+                f"{col.model.inputs[int(r)]} holds the '{name}' guard on "
+                f"[{edges[int(first)]:.6g}, {edges[int(last)]:.6g}] s"
+            )
+        t0 += sol["T"][k]
+    return out
