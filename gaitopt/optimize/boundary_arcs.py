@@ -13,9 +13,15 @@ the switching-time transcription (:class:`~gaitopt.optimize.radau.Arc`) like any
 On a boundary arc (the input's kind :data:`~gaitopt.optimize.radau.BOUNDARY`) the
 transcription imposes (:func:`boundary_rows`):
 
-* ``c̈(x, u, p) = ∇ċ · f = 0`` at the arc's collocation points: with the collocation
-  equations the polynomial ``ċ(x(τ))`` (linear in the state) has a zero slope at the ``d``
-  Radau points, so it is constant on each interval, and ``c`` with it;
+* ``ċ(x) = 0`` at the arc's collocation points: with ``ċ = 0`` at the entry, the polynomial
+  ``ċ(x(τ))`` (linear in the state: the knee's ``q̇3 − q̇2``) vanishes at ``d + 1`` points of
+  each interval, so everywhere, and ``c`` stays at its entry value 0.  With the collocation
+  equations ``ẋ(τⱼ) = f(xⱼ, uⱼ)`` these rows are the acceleration constraint ``c̈(xⱼ, uⱼ) =
+  ∇ċ · f = 0`` at the Radau points (the slope of a polynomial that vanishes is zero), the
+  equation that fixes the torque — but linear in the unknowns, which IPOPT keeps satisfied
+  once met: from the passive-knee optimum the rows ``c̈ = 0`` themselves did not converge on
+  the knee-powered statement (271 iterations, the arc grown over the whole phase) where these
+  do in 22.  ``tests/test_boundary_arcs.py`` checks ``c̈ = 0`` at the points of a solution;
 * ``c = 0`` and ``ċ = 0`` at its entry — unless the entry is the first node of the orbit's
   first phase and the section makes both vanish identically there (the kneed walker's section
   ``q3 = q2``, ``q̇3 = q̇2``: rows of zero gradient, which IPOPT cannot use);
@@ -154,9 +160,9 @@ def _vanishes_on_section(col: Any, fn: ca.Function) -> bool:
 
 
 def boundary_rows(col: Any, add: Any, k: int, i: int, Xk: Any, Uk: Any, p: Any, label: str) -> None:
-    """The rows of phase ``k``'s (model phase ``i``'s) boundary arcs: ``c̈ = 0`` at their
-    collocation points, ``c = 0`` and ``ċ = 0`` at each entry (not where the section makes them
-    vanish identically)."""
+    """The rows of phase ``k``'s (model phase ``i``'s) boundary arcs: ``ċ = 0`` at their
+    collocation points (with the collocation equations, ``c̈ = 0`` there), ``c = 0`` and
+    ``ċ = 0`` at each entry (not where the section makes them vanish identically)."""
     if col.structure is None:
         return
     held, r = _boundary_intervals(col, k)
@@ -166,13 +172,11 @@ def boundary_rows(col: Any, add: Any, k: int, i: int, Xk: Any, Uk: Any, p: Any, 
     if found is None or found[1] != r:
         raise ValueError(f"boundary arcs in {label}: input {r} does not hold the phase's guard")
     c = found[0]
-    flow = col.model.phases[i].flow
-    crate = rate_along(flow, c)
-    acc = rate_along(flow, crate)
+    crate = rate_along(col.model.phases[i].flow, c)
     d = col.d
     nodes = [j for j in range(col.N * d) if held[j // d]]
-    add(f"boundary arc of the guard: its acceleration zero ({label})",
-        acc.map(len(nodes))(Xk[:, [j + 1 for j in nodes]], Uk[:, nodes], p))  # fmt: skip
+    add(f"boundary arc of the guard: its rate zero ({label})",
+        crate.map(len(nodes))(Xk[:, [j + 1 for j in nodes]], Uk[:, nodes], p))  # fmt: skip
     entries = [j for j in range(col.N) if held[j] and (j == 0 or not held[j - 1])]
     rows = []
     for j in entries:

@@ -111,8 +111,9 @@ class Arc:
         everywhere); a sign alone would leave a held joint free to creep both ways between the
         nodes, and a coasting input free wherever the cost is flat.  ``3``
         (:data:`BOUNDARY`): it holds its joint with the phase's guard at zero (the kneed
-        walker's knee held straight by its torque), ``c̈ = 0`` at the arc's points and ``c = ċ
-        = 0`` at its entry (:mod:`gaitopt.optimize.boundary_arcs`); no power either.
+        walker's knee held straight by its torque), ``ċ = 0`` at the arc's points (so ``c̈ =
+        0`` there) and ``c = ċ = 0`` at its entry (:mod:`gaitopt.optimize.boundary_arcs`); no
+        power either.
     fraction : float
         Initial guess of the arc's share of the phase duration (1).
     bounds : tuple of int
