@@ -47,7 +47,7 @@ import numpy as np
 
 from ..hybrid import rate_along
 from .radau import BOUNDARY, HELD, Arc
-from .state_arcs import ACTIVE_TOL, guard_functions
+from .state_arcs import guard_functions
 
 __all__ = [
     "boundary_nodes",
@@ -57,8 +57,13 @@ __all__ = [
     "held_on_guard",
 ]
 
-#: Samples inside each held arc at which a first solution's guard side is read.
+#: Samples in the first half of each held arc at which a first solution's guard side is read.
 SAMPLES = 9
+#: The guard side is at zero on a first solution's held arc within this fraction of
+#: ``1 + max |c|``: the slack solution's own precision, with which
+#: :func:`~gaitopt.optimize.arcs.detect_structure` calls a joint held (its knee flexion there
+#: 3e-5 rad at most, of 0.34).
+SMALL = 1e-4
 
 
 def guard_rate_input(col: Any, i: int) -> tuple[ca.Function, int, int] | None:
@@ -95,7 +100,8 @@ def held_on_guard(
     """``structure`` (arcs of a first solution ``w`` of ``col``, per phase) with each held
     arc of the input whose rate is the guard's (:func:`guard_rate_input`) made a boundary arc
     (:data:`~gaitopt.optimize.radau.BOUNDARY`) where the solution's guard side is at zero —
-    within ``ACTIVE_TOL (1 + max |c|)`` at :data:`SAMPLES` points inside the arc."""
+    within :data:`SMALL` ``(1 + max |c|)`` at :data:`SAMPLES` points of the arc's first half
+    (a slack solution's held arc ends a node or two late, where the joint already moves)."""
     sol = col.unpack(w, p)
     out = []
     for k, i in enumerate(col.chain):
@@ -112,12 +118,12 @@ def held_on_guard(
         for a, arc in enumerate(arcs):
             if arc.signs[r] != HELD:
                 continue
-            inside = edges[a] + (edges[a + 1] - edges[a]) * np.linspace(0.05, 0.95, SAMPLES)
+            inside = edges[a] + (edges[a + 1] - edges[a]) * np.linspace(0.0, 0.5, SAMPLES)
             tn = np.concatenate([inside, every])
             X, _ = col.evaluate(sol["X"][k], sol["U"][k], tn, sol["breaks"][k])
             values = np.asarray(c.map(tn.size)(X, np.zeros((n_u, tn.size)), sol["p"]), dtype=float)
             values = values.ravel()
-            tol = ACTIVE_TOL * (1 + float(np.max(np.abs(values))))
+            tol = SMALL * (1 + float(np.max(np.abs(values))))
             if np.max(np.abs(values[:SAMPLES])) <= tol:
                 signs = tuple(BOUNDARY if j == r else s for j, s in enumerate(arc.signs))
                 arcs[a] = replace(arc, signs=signs)
