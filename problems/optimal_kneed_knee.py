@@ -139,7 +139,9 @@ def solve_speed(speed: float) -> dict:
         "boundary_arcs": "",
         "touch_points": "",
         "max_abs_multiplier": (
-            float(np.max(np.abs(gait.multipliers))) if gait.multipliers is not None else None
+            float(np.max(np.abs(gait.multipliers)))
+            if gait.multipliers is not None and np.size(gait.multipliers)
+            else None
         ),
         "time_passive_s": round(t1 - t0, 1),
         "time_s": round(t2 - t1, 1),
