@@ -81,6 +81,8 @@ def guard_rate_input(col: Any, i: int) -> tuple[ca.Function, int, int] | None:
     if ca.depends_on(crate(x, u, p), u):
         return None
     rates = col.model.input_rates(i)
+    if rates is None:  # a model without inputs' rates in this phase
+        return None
     rng = np.random.default_rng(0)
     xs = rng.normal(size=(n, 3))
     pv = col.model.p
