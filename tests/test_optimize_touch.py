@@ -143,3 +143,39 @@ def test_touch_point_with_active_input_bound(touched):
     assert f"touch points of {LABEL} (single support)" in gait.active_constraints
     assert any(a.startswith("arcs of the input bounds") for a in gait.active_constraints)
     assert 0.5 < _junction(gait) < 0.6
+
+
+def test_clearance_margin_rate_is_the_margin_derivative():
+    # The clearance margin's rate at a junction (state_arcs.margin_rate, the term a touch of
+    # the margin subtracts from ḣ) against the central difference of the margin itself
+    # (state_arcs.margin_samples) on the kneed walker's two phases: h = 1e-6 s, so the gap is
+    # the difference's truncation ~c (π/T)³ h² ≈ 1e-12 plus rounding ~1e-10 (1e-7 m/s asked).
+    from dataclasses import replace
+
+    import casadi as ca
+
+    from gaitopt.optimize import GaitProblem
+    from gaitopt.optimize.radau import COAST, NEGATIVE, Arc
+    from gaitopt.optimize.state_arcs import clearance_functions, margin_rate, margin_samples
+
+    model = gaitopt.model("kneed_walker", slope=0.03)
+    problem = GaitProblem(model, "cot", step_length=0.47, speed=0.84,
+                          bounds={"hip_torque": 5.0, "knee_torque": 0.0},
+                          clearance=0.01)  # fmt: skip
+    arcs = [Arc(3, (COAST, COAST, NEGATIVE), 0.5), Arc(3, (COAST, COAST, NEGATIVE), 0.5)]
+    col = _collocation(problem, RadauMesh(6, 3), [arcs, arcs])
+    assert [label for label, _ in clearance_functions(col, 0)] == [
+        "'swing foot above the slope' >= clearance margin"
+    ]
+    T = np.array([0.35, 0.21])  # s: the phases' durations
+    hs = [T[1] / 6] * 6
+    for end in (1, 3, 5):
+        rate = float(ca.evalf(margin_rate(col, [ca.DM(t) for t in T], [ca.DM(h) for h in hs],
+                                          1, end)))  # fmt: skip
+        t = end / 6
+        dt = 1e-6 / T[1]
+        fd = (margin_samples(col, T, 1, np.array([t + dt])) -
+              margin_samples(col, T, 1, np.array([t - dt]))) / 2e-6  # fmt: skip
+        assert rate == pytest.approx(float(fd[0]), abs=1e-7)
+    none = replace(problem, clearance=0.0)
+    assert clearance_functions(_collocation(none, RadauMesh(6, 3), [arcs, arcs]), 0) == []

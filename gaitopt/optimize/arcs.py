@@ -25,13 +25,13 @@ from typing import Any
 import numpy as np
 
 from .collocation import Arc, Collocation
-from .radau import COAST, HELD, NEGATIVE, POSITIVE
+from .radau import BOUNDARY, COAST, HELD, NEGATIVE, POSITIVE
 
 #: Mesh intervals per arc of the switching-time transcription, before refinement.
 ARC_INTERVALS = 2
 
 
-_SYMBOLS = {POSITIVE: "+", NEGATIVE: "-", COAST: "coast", HELD: "held"}
+_SYMBOLS = {POSITIVE: "+", NEGATIVE: "-", COAST: "coast", HELD: "held", BOUNDARY: "boundary"}
 
 
 def _describe(structure: list[list[Arc]]) -> str:

@@ -19,6 +19,7 @@ from ..orbit import solve as sequence
 from ..stability import is_stable
 from .active import _active
 from .arcs import saturated_spans
+from .boundary_arcs import boundary_spans
 from .collocation import Collocation
 from .floquet import multipliers_of, return_map_jacobian
 from .problem import GaitProblem
@@ -135,4 +136,7 @@ def _certify(
     touches = touch_times(col, w, p)
     if touches:  # touch points of state bounds and limits, made junctions
         result.message += f"; touch points (free mesh points): {', '.join(touches)}"
+    held = boundary_spans(col, w, p)
+    if held:  # boundary arcs of a guard (the knee held straight), entry and exit junctions
+        result.message += f"; boundary arcs: {', '.join(held)}"
     return result

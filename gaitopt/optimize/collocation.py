@@ -342,6 +342,10 @@ class Collocation:
             for k in range(len(self.chain))
         ]
         thetas = None
-        if self.structure is not None and other.structure is not None:
+        if (
+            self.structure is not None
+            and other.structure is not None
+            and [len(a) for a in self.structure] == [len(a) for a in other.structure]
+        ):  # the same arcs (else: this structure's own fractions, a cut of other's)
             thetas = [other.theta_of(w, k) for k in range(len(self.chain))]
         return self.pack(sol["s"], sol["free"], states, inputs, sol["T"], sol["p"], thetas)

@@ -11,6 +11,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from .boundary_arcs import boundary_rows
 from .radau import COAST, HELD, NEGATIVE, POSITIVE, lagrange_matrix
 from .state_arcs import touch_rows
 
@@ -45,7 +46,7 @@ def cost_rows(col: Any, add: Any, v: Any, terms: Any, k: int, i: int, ph: Any) -
         if structure is not None and any(any(a.bounds) for x in structure for a in x):
             bound_arcs(col, k, Xk, Uk, p, label, add)  # the arcs of input bounds
         if structure is not None:  # touch points of state bounds and limits
-            touch_rows(col, k, i, Xk, Uk, p, label, add)
+            touch_rows(col, k, i, Xk, Uk, p, label, add, (v.T, ph.hs))
         L = ca.vertcat(*[problem.integrand(i, Xc[:, c], Uk[:, c], p) for c in range(N * d)])
         terms.cost.append(hq * ca.mtimes(L.T, wq))
 
@@ -55,7 +56,8 @@ def _work_arc_rows(
 ) -> None:
     """The arcs of a work-based cost: on each arc every input has a power sign
     (``σ uᵢωᵢ ≥ 0`` at the nodes, the arc's start and the midpoints; fixed at its bound on a
-    bang arc), coasts (``u ≡ 0``) or holds its joint (``ω ≡ 0``); the cost is the positive
+    bang arc), coasts (``u ≡ 0``), holds its joint (``ω ≡ 0``) or holds it on the phase's
+    guard (a boundary arc, :mod:`gaitopt.optimize.boundary_arcs`); the cost is the positive
     work ``Σ_{σ=+} uᵢωᵢ`` by quadrature, exact on each arc."""
     problem, model, structure = col.problem, col.model, col.structure
     N, d, B = col.N, col.d, col.blocks
@@ -159,7 +161,8 @@ def _work_arc_rows(
         braking = (node_kinds == NEGATIVE) & np.repeat(signed, d, axis=1)
         terms.brake.append(ca.mtimes(ca.sum1(ca.DM(braking.astype(float)) * Uk**2), wq))
     terms.work.append(problem.impulse_work(i, x_end, u_end, p))
-    touch_rows(col, k, i, Xk, Uk, p, label, add)  # guards' touch points, if cut
+    touch_rows(col, k, i, Xk, Uk, p, label, add, (v.T, ph.hs))  # guards' touches, if cut
+    boundary_rows(col, add, k, i, Xk, Uk, p, label)  # boundary arcs of the guard, if any
 
 
 def bound_arcs(col: Any, k: int, Xk: Any, Uk: Any, p: Any, label: str, add: Any) -> None:

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..errors import GaitoptInputError
 from ..hybrid import rate_along
+from .boundary_arcs import boundary_nodes
 from .collocation_kernels import defect_block, node_block
 from .collocation_limits import add_limits
 from .nodes import substitute
@@ -196,7 +197,7 @@ def phase_rows(col: Any, add: Any, v: Unknowns, terms: Terms, k: int, i: int) ->
     Yk = node_block(col, i, Xc, Uk, Ak, p)
     _dynamics_rows(col, add, phase, label, Xk, Uk, Ak, Yk, hs, p)
     x_end, u_end = Xk[:, -1], Uk[:, -1]
-    _guard_rows(col, add, phase, label, Xc, Uk, Tk, hs, x_end, u_end, p)
+    _guard_rows(col, add, phase, label, Xc, Uk, Tk, hs, x_end, u_end, p, k)
     u_start = ca.mtimes(Uk[:, :d], ca.DM(col.u_at_start))
     _constraint_rows(col, add, phase, label, T, hs, k, Xk, Uk, Yk, u_start, p)
     add_limits(col, add, k, i, label, Xk, Uk, u_start, p)
@@ -253,10 +254,10 @@ def _dynamics_rows(
 
 def _guard_rows(
     col: Any, add: Any, phase: Any, label: str, Xc: Any, Uk: Any, Tk: Any, hs: list,
-    x_end: Any, u_end: Any, p: Any,
+    x_end: Any, u_end: Any, p: Any, k: int,
 ) -> None:  # fmt: skip
     """The phase ends on its guard, crossing it in its direction, admissibly (and, without
-    an admissibility test, not before)."""
+    an admissibility test, not before, except on phase ``k``'s boundary arcs of the guard)."""
     tr = phase.transitions[0]
     add(f"guard '{tr.name}' at the end of {label}", tr.guard(x_end, u_end, p))
     if tr.admissible is None and Xc.shape[1] > 1:
@@ -265,6 +266,9 @@ def _guard_rows(
         # interior nodes (the kneed walker's knee must not straighten early).
         inner = tr.guard.map(Xc.shape[1] - 1)(Xc[:, :-1], Uk[:, :-1], p)
         inner = tr.direction * inner + phase_margin(col, hs, Tk)[:, :-1]
+        on_guard = boundary_nodes(col, k)  # boundary arcs hold the guard at 0 by equalities
+        if on_guard is not None:
+            inner = inner[:, [j for j in range(Xc.shape[1] - 1) if not on_guard[j]]]
         add(f"'{tr.name}' not before the end of {label}", inner, -np.inf)
     rate = rate_along(phase.flow, tr.guard)(x_end, u_end, p)
     add(

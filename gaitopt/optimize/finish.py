@@ -21,6 +21,7 @@ from .attempt import (
     _converged,
     _run,
 )
+from .boundary_arcs import held_on_guard
 from .certify import _certify
 from .collapsed import move_collapsed_arcs, warm_start
 from .collocation import Collocation, RadauMesh
@@ -28,7 +29,7 @@ from .mesh import OptimumTranscription, first_solution, ipopt_solver
 from .problem import GaitProblem
 from .result import OptimalGait
 from .spectral_certify import certify_spectral
-from .state_arcs import detect_touches, guard_touch_structure
+from .state_arcs import clearance_functions, detect_touches, guard_touch_structure
 
 __all__ = ["finish"]
 
@@ -60,7 +61,8 @@ def finish(
         w_slack, stats_slack = _run(slack_fine, slack_fine.from_solution(col, w, p), p)
         if _converged(stats_slack):
             col, w = slack_fine, w_slack
-        structure = detect_structure(col, w, p)
+        # Held arcs on a guard (the kneed walker's knee held straight) are boundary arcs.
+        structure = held_on_guard(col, w, p, detect_structure(col, w, p))
         exact = _collocation(
             problem,
             RadauMesh(sum(a.intervals for a in structure[0]), col.d),
@@ -93,6 +95,12 @@ def finish(
             )
         col, w, stats = exact, w_exact, stats_exact
         structure_note = f"; arcs of the power signs {_describe(structure)}"
+        if problem.clearance:
+            # A swing foot's height touching its clearance margin inside a phase is a kink no
+            # mesh interval follows: made a junction before the refinement.
+            col, w, stats, structure_note = _clearance_touches(
+                problem, col, w, stats, structure_note
+            )
     elif (structure := _arcs_without_powers(col, w, p)) is not None:
         # An active input bound: arcs with the input at its bound and free junction times
         # (the kink where it meets the bound is no longer inside a mesh interval); a touch
@@ -161,6 +169,33 @@ def finish(
         )
     certify_spectral(col, w, result)  # ρ(A) ≤ R by AD and by finite differences, where asked
     return result
+
+
+def _clearance_touches(
+    problem: GaitProblem, col: Collocation, w: np.ndarray, stats: dict[str, Any], note: str
+) -> tuple[Collocation, np.ndarray, dict[str, Any], str]:
+    """The exact-work transcription ``col`` (``w``) cut at the interior touch points of its
+    clearance margins (:func:`~gaitopt.optimize.state_arcs.clearance_functions`: the kneed
+    walker's swing foot at mid-swing, with ``clearance=0.01``), the touches junctions with
+    ``ḣ`` equal to the margin's rate there, if it has any and the cut solves; else as given."""
+    p = problem.model.p
+    cut = detect_touches(col, w, p, col.structure, functions=clearance_functions)
+    if cut is None:
+        return col, w, stats, note
+    touched = _collocation(problem, RadauMesh(sum(a.intervals for a in cut[0]), col.d), cut)
+    w_cut, stats_cut = _run(touched, touched.from_solution(col, w, p), p)
+    if not _converged(stats_cut):
+        return col, w, stats, note
+    names = dict.fromkeys(n for arcs in cut for a in arcs for n in a.touches)
+    return (
+        touched,
+        w_cut,
+        stats_cut,
+        (
+            f"; arcs of the power signs {_describe(cut)}; touch points of {', '.join(names)} "
+            f"made junctions"
+        ),
+    )
 
 
 def _arcs_without_powers(col: Collocation, w: np.ndarray, p: np.ndarray) -> Any:

@@ -14,7 +14,17 @@ import numpy as np
 
 from ..errors import GaitoptInputError
 
-__all__ = ["Arc", "COAST", "Group", "HELD", "NEGATIVE", "POSITIVE", "RadauMesh", "lagrange_matrix"]
+__all__ = [
+    "Arc",
+    "BOUNDARY",
+    "COAST",
+    "Group",
+    "HELD",
+    "NEGATIVE",
+    "POSITIVE",
+    "RadauMesh",
+    "lagrange_matrix",
+]
 
 
 @dataclass(frozen=True)
@@ -77,6 +87,9 @@ def _derivative_matrix(nodes: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 #: Kinds of an input on an :class:`Arc` (its ``signs``).
 POSITIVE, NEGATIVE, COAST, HELD = 1, -1, 0, 2
+#: The input holds its joint with the phase's guard at zero: a boundary arc of the guard's side
+#: (:mod:`gaitopt.optimize.boundary_arcs`).
+BOUNDARY = 3
 
 
 @dataclass(frozen=True)
@@ -96,7 +109,11 @@ class Arc:
         ``ω(x) = 0`` at its start and collocation points (for a rate linear in the state, the
         degree-``d`` polynomial ``ω(x(τ))`` vanishes at ``d + 1`` points of each interval, so
         everywhere); a sign alone would leave a held joint free to creep both ways between the
-        nodes, and a coasting input free wherever the cost is flat.
+        nodes, and a coasting input free wherever the cost is flat.  ``3``
+        (:data:`BOUNDARY`): it holds its joint with the phase's guard at zero (the kneed
+        walker's knee held straight by its torque), ``ċ = 0`` at the arc's points (so ``c̈ =
+        0`` there) and ``c = ċ = 0`` at its entry (:mod:`gaitopt.optimize.boundary_arcs`); no
+        power either.
     fraction : float
         Initial guess of the arc's share of the phase duration (1).
     bounds : tuple of int

@@ -43,6 +43,7 @@ __all__ = [
     "touch_rows",
     "limit_functions",
     "guard_functions",
+    "clearance_functions",
     "guard_touch_structure",
     "describe_touches",
     "touch_times",
@@ -91,13 +92,66 @@ def guard_functions(col: Any, i: int) -> list[tuple[str, ca.Function]]:
     return [(f"'{tr.name}' guard side >= 0", ca.Function("c", [x, u, p], [c]))]
 
 
+#: The label's ending of a length-valued unilateral constraint kept with the clearance margin.
+CLEARANCE = ">= clearance margin"
+
+
+def clearance_functions(col: Any, i: int) -> list[tuple[str, ca.Function]]:
+    """``(label, h)`` of every length-valued unilateral constraint of model phase ``i`` (unit
+    ``"m"``: a swing foot's height) when the problem has a clearance margin
+    (:attr:`GaitProblem.clearance`): the transcription keeps ``h(x) ≥ c · sin(π t / T)`` at
+    the nodes (``t`` the time since the step's section, ``T`` the step's duration), and an
+    optimum may touch that margin inside a phase (the kneed walker's swing foot at mid-swing,
+    0.13 s after heel strike at 0.84 m/s).  The label is ``"'swing foot above the slope' >=
+    clearance margin"``; :func:`detect_touches` subtracts the margin from ``h`` and
+    :func:`touch_rows` its rate from ``ḣ``."""
+    if not col.problem.clearance:
+        return []
+    return [
+        (f"'{c.name}' {CLEARANCE}", c.function)
+        for c in col.model.phases[i].constraints
+        if c.unit == "m"
+    ]
+
+
+def guard_functions_and_clearance(col: Any, i: int) -> list[tuple[str, ca.Function]]:
+    """:func:`guard_functions` and :func:`clearance_functions` of model phase ``i``."""
+    return guard_functions(col, i) + clearance_functions(col, i)
+
+
 def guard_touch_structure(col: Any, w: np.ndarray, p: np.ndarray) -> list[list[Arc]] | None:
     """The arcs of a solved exact-work transcription ``col`` (``w``) cut at the interior touch
-    points of its guards' sides (:func:`guard_functions`), the touches made junctions with
-    ``ċ = 0`` there (:func:`touch_rows`); None without a structure or a touch."""
+    points of its guards' sides (:func:`guard_functions`) and of its clearance margins
+    (:func:`clearance_functions`), the touches made junctions with ``ċ = 0`` there
+    (:func:`touch_rows`); None without a structure or a touch."""
     if col.structure is None:
         return None
-    return detect_touches(col, w, p, col.structure, functions=guard_functions)
+    return detect_touches(col, w, p, col.structure, functions=guard_functions_and_clearance)
+
+
+def _step_times(col: Any, T: Any, k: int) -> tuple[Any, Any]:
+    """``(t₀, T_step)``: the time from phase ``k``'s step section to the phase's start and the
+    step's duration, from the phase durations ``T`` (numbers or symbols)."""
+    n_cycle = len(col.model.phases)
+    first = n_cycle * (k // n_cycle)
+    before = sum((T[j] for j in range(first, k)), 0.0 * T[k])
+    return before, sum((T[j] for j in range(first + 1, first + n_cycle)), T[first])
+
+
+def margin_samples(col: Any, T: np.ndarray, k: int, tn: np.ndarray) -> np.ndarray:
+    """The clearance margin ``c · sin(π t / T_step)`` (m) at normalised times ``tn`` of phase
+    ``k`` (durations ``T``, s)."""
+    before, step = _step_times(col, list(T), k)
+    return col.problem.clearance * np.sin(np.pi * (before + tn * T[k]) / step)
+
+
+def margin_rate(col: Any, T: list[Any], hs: list[Any], k: int, end: int) -> Any:
+    """The clearance margin's rate ``c π / T_step · cos(π t / T_step)`` (m/s) at the end of
+    mesh interval ``end − 1`` of phase ``k`` (``T``: the phases' durations, ``hs``: phase
+    ``k``'s interval lengths, symbols)."""
+    before, step = _step_times(col, T, k)
+    t = before + sum(hs[:end], 0.0 * hs[0])
+    return col.problem.clearance * np.pi / step * ca.cos(np.pi * t / step)
 
 
 def _interior_minima(c: np.ndarray, tol: float) -> list[int]:
@@ -150,6 +204,8 @@ def detect_touches(
         found = []
         for label, fn in functions(col, i):
             c = np.asarray(fn.map(tn.size)(X, U, sol["p"]), dtype=float).ravel()
+            if label.endswith(CLEARANCE):  # h − c sin(π t / T_step)
+                c = c - margin_samples(col, sol["T"], k, tn)
             tol = ACTIVE_TOL * (1 + float(np.max(np.abs(c))))
             found.extend((float(tn[j]), label) for j in _interior_minima(c, tol))
         cuts.append(sorted(found))
@@ -199,22 +255,31 @@ def detect_touches(
     return out
 
 
-def touch_rows(col: Any, k: int, i: int, Xk: Any, Uk: Any, p: Any, label: str, add: Any) -> None:
+def touch_rows(
+    col: Any, k: int, i: int, Xk: Any, Uk: Any, p: Any, label: str, add: Any,
+    times: tuple[list[Any], list[Any]] | None = None,
+) -> None:  # fmt: skip
     """Rows ``ċ = ∇c · f(x, u, p) = 0`` at each junction of phase ``k`` (model phase ``i``)
     that ends an arc with touches (:attr:`Arc.touches`): the node is the last Radau point of
     the interval before the junction, where the collocation makes the state polynomial's slope
-    the flow, so the polynomial's ``c`` is stationary there."""
+    the flow, so the polynomial's ``c`` is stationary there.  For a clearance margin
+    (:func:`clearance_functions`) ``ḣ`` less the margin's rate (:func:`margin_rate`; ``times``:
+    the phases' durations and phase ``k``'s interval lengths, symbols)."""
     structure = col.structure[k]
     d = col.d
     flow = col.model.phases[i].flow
     functions = dict(limit_functions(col, i))
     if any(name not in functions for arc in structure for name in arc.touches):
-        functions.update(guard_functions(col, i))
+        functions.update(guard_functions_and_clearance(col, i))
     end = 0
     for arc in structure[:-1]:
         end += arc.intervals
         for name in arc.touches:
             rate = rate_along(flow, functions[name])(Xk[:, end * d], Uk[:, end * d - 1], p)
+            if name.endswith(CLEARANCE):
+                if times is None:
+                    raise ValueError(f"touch_rows: the touch of {name} needs the phase times")
+                rate = rate - margin_rate(col, times[0], times[1], k, end)
             add(f"touch of '{name}' at a junction ({label})", rate)
 
 
