@@ -16,6 +16,7 @@ import pytest
 
 import gaitopt
 from gaitopt.errors import GaitoptInputError
+from gaitopt.kernels.cache import compiler
 from gaitopt.models import model_names
 from gaitopt.simulation import simulate
 
@@ -50,6 +51,14 @@ _MODELS = [
 ]
 
 
+needs_compiler = pytest.mark.skipif(
+    compiler() is None,
+    reason="no C compiler ($GAITOPT_CC, default gcc; or GAITOPT_COMPILE=0): no compiled arcs to "
+    "compare (the fallback is tested by test_without_a_compiler_the_python_loop_runs)",
+)
+
+
+@needs_compiler
 @pytest.mark.parametrize("name", _MODELS)
 def test_compiled_arcs_take_the_python_loops_steps_and_events(name):
     model = gaitopt.model(name)
@@ -58,6 +67,7 @@ def test_compiled_arcs_take_the_python_loops_steps_and_events(name):
     _agree(compiled, python)
 
 
+@needs_compiler
 @pytest.mark.parametrize("name", ["compass_gait", "slip", "rimless_wheel"])
 def test_a_guess_simulation_agrees_too(name):
     # The shooting's guess: looser tolerances, no unilateral constraints (the "g" event set).
@@ -69,6 +79,7 @@ def test_a_guess_simulation_agrees_too(name):
     )
 
 
+@needs_compiler
 @pytest.mark.parametrize(
     "start, options, status",
     [
@@ -84,6 +95,7 @@ def test_a_timeout_and_a_fall_agree(start, options, status):
     _agree(simulate(model, start, steps=2, backend="compiled", **options), python)
 
 
+@needs_compiler
 def test_an_arc_longer_than_the_step_buffers_resumes(monkeypatch):
     # The driver returns when its step buffers are full and the next call goes on from its
     # state: with room for 3 steps per call (an arc takes about 20), the same steps and events.
@@ -121,6 +133,7 @@ def test_bad_backend_is_refused():
         simulate(model, steps=1, backend="compiled", method="RK45")
 
 
+@needs_compiler
 def test_bench_record_and_table(tmp_path):
     # The bench's fast mode on two models: a well-formed record whose two backends took the same
     # integrator steps and agree on every event time (1e-12 s, as above).  No timing asserted.
@@ -143,6 +156,7 @@ def test_bench_record_and_table(tmp_path):
     assert "speed-up per simulation" in bench.table(record)
 
 
+@needs_compiler
 def test_the_shootings_guess_and_referee_run_compiled(monkeypatch):
     # find_limit_cycle simulates twice with a constant input (its guess, then the referee from the
     # fixed point): both through compiled arcs by default, none through the Python loop.

@@ -53,6 +53,22 @@ def _env() -> dict[str, str]:
     return dict(os.environ, MPLBACKEND="Agg")
 
 
+def _ctrl_c_delivered() -> None:
+    """In the child, before it starts: SIGINT at its default.  A shell starts background jobs
+    with SIGINT ignored (POSIX), and a child inherits that, so a suite run in the background
+    would otherwise test nothing; Python then installs its KeyboardInterrupt handler."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+@pytest.fixture(autouse=True)
+def _python_sigint_handler():
+    """Python's own Ctrl-C handler during each test, whatever this process inherited (see
+    :func:`_ctrl_c_delivered`); the previous handler afterwards."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 # -- real runs, interrupted ----------------------------------------------------------------------
 def test_ctrl_c_while_optimize_writes_its_out_folder_leaves_no_folder(tmp_path):
     """The issue's case: interrupted while it wrote the GIF, `optimize --out` left optimal.json,
@@ -63,6 +79,7 @@ def test_ctrl_c_while_optimize_writes_its_out_folder_leaves_no_folder(tmp_path):
     proc = subprocess.Popen(
         [console_script("gaitopt"), "optimize", "compass_gait", "--out", str(out)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=_env(),
+        preexec_fn=_ctrl_c_delivered,
     )  # fmt: skip
     try:
         _wait_for(lambda: any(_partials(tmp_path)), proc)
@@ -92,6 +109,7 @@ def test_ctrl_c_while_continue_computes_keeps_an_existing_out_folder_as_it_was(t
     proc = subprocess.Popen(
         [sys.executable, "-c", code, *argv],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=_env(),
+        preexec_fn=_ctrl_c_delivered,
     )  # fmt: skip
     try:
         assert proc.stderr.readline() == "started\n"  # imports done: main() is running
@@ -120,6 +138,7 @@ def test_ctrl_c_in_make_gaits_leaves_the_model_folder_of_the_last_complete_run(t
     proc = subprocess.Popen(
         [sys.executable, "-m", "gaitopt.gaits", "--out", str(tmp_path), "--models", "vanderpol"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=_env(),
+        preexec_fn=_ctrl_c_delivered,
     )  # fmt: skip
     try:
         _wait_for(lambda: any(_partials(tmp_path)), proc)
