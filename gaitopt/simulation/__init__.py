@@ -176,11 +176,9 @@ def simulate(
         step_parameters.append(changes)
         return model.replace(**changes).p
 
+    # SciPy's stepper class: imported by integrate_phase only where it runs (scipy.integrate:
+    # 0.3–0.5 s); DOP853 with a constant or vectorised input needs none (gaitopt.dop853)
     solver_cls = None
-    if library is None:  # SciPy's stepper (scipy.integrate: 0.3–0.5 s, imported when needed)
-        import scipy.integrate
-
-        solver_cls = getattr(scipy.integrate, method)
 
     sim = Simulation(False, "completed", "")
     sec_t: list[float] = []
