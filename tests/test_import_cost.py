@@ -76,6 +76,28 @@ def test_solve_path_imports_only_what_it_uses():
     assert sorted(model_files & modules) == ["gaitopt.models.compass_gait"]
 
 
+def test_optimise_path_imports_no_scipy():
+    """The compass gait's optimum (level, 0.3 m in 0.8 s: ``bench.first_call``'s call), solved
+    and verified, imports none of SciPy: the referee and the finite-difference multipliers
+    simulate the input profile with :class:`gaitopt.dop853.CompiledDOP853` in SciPy's DOP853
+    frame restated (:mod:`gaitopt.dop853_base`), its crossings by :func:`gaitopt.brent.brentq`,
+    and the BLAS limit loads SciPy's OpenBLAS without ``scipy.linalg``."""
+    from gaitopt.kernels.cache import compiler
+
+    if compiler() is None:
+        pytest.skip("no C compiler: the guess's simulation runs SciPy's stepper")
+    optimise = (
+        "import gaitopt\n"
+        "g = gaitopt.optimize_gait(gaitopt.model('compass_gait', slope=0.0), period=0.8, "
+        "step_length=0.3)\n"
+        "assert g.success and g.verified and g.multipliers_fd is not None, g.message"
+    )
+    _modules_after(optimise)  # the kernel cache warm
+    modules = _modules_after(optimise)
+    assert _under(modules, "scipy.integrate", "scipy.optimize", "scipy.linalg") == []
+    assert _under(modules, "scipy") == []
+
+
 def test_cli_imports_the_chosen_subcommand_only():
     """``gaitopt solve`` declares and runs the solve subcommand's module alone."""
     modules = _modules_after(

@@ -139,8 +139,9 @@ class PhaseFunctions:
         breaks = getattr(feedforward, "breaks", None)
         local = np.zeros(0)
         if callable(breaks):
-            local = np.unique(np.asarray(breaks(step), dtype=float).ravel())
-            local = local[local > 0]
+            local = np.sort(np.asarray(breaks(step), dtype=float).ravel())
+            # the distinct breaks after 0 (np.unique's values, without its import of numpy.ma)
+            local = local[(local > 0) & np.append(True, local[1:] != local[:-1])]
         before = np.nextafter(local, -np.inf)  # the last time before each break
 
         def drive(times: np.ndarray, stop: int | None) -> np.ndarray:
