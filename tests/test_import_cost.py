@@ -69,7 +69,7 @@ def test_solve_path_imports_only_what_it_uses():
     if compiler() is None:
         pytest.skip("no C compiler: the simulation runs SciPy's stepper")
     solve = "import gaitopt\nassert gaitopt.find_limit_cycle(gaitopt.model('compass_gait')).success"
-    _modules_after(solve)  # the kernel cache warm (building kernels imports SciPy's DOP853 class)
+    _modules_after(solve)  # the kernel cache warm
     modules = _modules_after(solve)
     assert _under(modules, *_NOT_ON_THE_SOLVE_PATH, "scipy.integrate") == []
     model_files = {f"gaitopt.models.{module}" for module, _ in BUILTIN.values()}
