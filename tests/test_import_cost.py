@@ -166,21 +166,26 @@ def test_every_module_imports_in_a_fresh_process():
 
 
 def test_blas_limit_without_importing_scipy_linalg():
-    """:mod:`gaitopt.threads` limits SciPy's bundled BLAS without importing ``scipy.linalg``;
-    imported later, SciPy's extension modules get that same (limited) library."""
+    """:mod:`gaitopt.threads` limits the loaded BLAS without loading SciPy's (its OpenBLAS would
+    start a worker thread that spins for 0.1 s); an OpenBLAS loaded inside the limit (SciPy's,
+    by ``import scipy.linalg``) starts with the limit's thread count, and the environment is
+    restored after."""
     script = (
-        "import sys\n"
+        "import os, sys\n"
         "from threadpoolctl import threadpool_info\n"
         "from gaitopt.threads import _limits\n"
+        "def scipys(): return [i for i in threadpool_info() if 'scipy.libs' in i['filepath']]\n"
         "with _limits(1):\n"
-        "    before = 'scipy.linalg' in sys.modules\n"
+        "    before = 'scipy.linalg' in sys.modules or bool(scipys())\n"
         "    import scipy.linalg\n"
         "    inside = sorted({i['num_threads'] for i in threadpool_info() if i['user_api'] == "
         "'blas'})\n"
-        "print(before, inside)\n"
+        "    loaded = bool(scipys())\n"
+        "print(before, inside, loaded, os.environ.get('OPENBLAS_NUM_THREADS'))\n"
     )
     env = {**os.environ, "PYTHONPATH": str(ROOT.parent)}
+    env.pop("OPENBLAS_NUM_THREADS", None)
     out = subprocess.run(
         [sys.executable, "-c", script], capture_output=True, text=True, env=env, check=True
     ).stdout
-    assert out.strip() == "False [1]"
+    assert out.strip() == "False [1] True None"
