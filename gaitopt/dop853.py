@@ -4,7 +4,9 @@
 *Solving ODEs I*, §II.10) spends most of a short simulation in Python: 12 right-hand-side calls
 per step, 3 more for the dense output, each through several Python frames.  :class:`CompiledDOP853`
 keeps SciPy's class — its initial step, error norm and step-size control, its
-``Dop853DenseOutput`` — and replaces only the arithmetic of one step by one call of a CasADi
+``Dop853DenseOutput``, restated without importing :mod:`scipy.integrate` (0.3–0.5 s at
+start-up) in :mod:`gaitopt.dop853_base` and :mod:`gaitopt.simulation.dense`, the same operations
+in the same order — and replaces only the arithmetic of one step by one call of a CasADi
 function built from the phase's flow with SciPy's own coefficients: the new state and rate, both
 error estimates, the dense-output coefficients, and the phase's event functions (guards and
 unilateral constraints) at the step's interior check points and its end.  Same method, same
@@ -29,14 +31,15 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
-from scipy.integrate import DOP853
-from scipy.integrate._ivp import dop853_coefficients as _dc
-from scipy.integrate._ivp.rk import Dop853DenseOutput
+
+from .dop853_base import Dop853Frame, coefficients
+from .simulation.dense import Dop853Piece
 
 __all__ = ["CompiledDOP853", "STAGE_FRACTIONS", "step_function"]
 
 # SciPy's step-size control (scipy/integrate/_ivp/rk.py)
 _SAFETY, _MIN_FACTOR, _MAX_FACTOR = 0.9, 0.2, 10.0
+_dc = coefficients()  # SciPy's, read without importing scipy.integrate
 _N = _dc.N_STAGES  # 12
 
 _CACHE: dict[tuple[int, int, int, bool], tuple[object, ca.Function]] = {}
@@ -169,9 +172,10 @@ class _Call:
         return float(self.norm[0])
 
 
-class CompiledDOP853(DOP853):
-    """:class:`scipy.integrate.DOP853` with each step (and its dense output and the event
-    functions at the check points) evaluated in one CasADi call.
+class CompiledDOP853(Dop853Frame):
+    """:class:`scipy.integrate.DOP853` (its frame: :class:`~gaitopt.dop853_base.Dop853Frame`)
+    with each step (and its dense output and the event functions at the check points) evaluated
+    in one CasADi call.
 
     Parameters
     ----------
@@ -273,4 +277,4 @@ class CompiledDOP853(DOP853):
         return True, None
 
     def _dense_output_impl(self):
-        return Dop853DenseOutput(self.t_old, self.t, self.y_old, self._F)
+        return Dop853Piece(self.t_old, self.t, self.y_old, self._F)  # SciPy's, restated

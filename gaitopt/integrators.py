@@ -8,9 +8,6 @@ parameters, so CasADi differentiates it exactly (the sensitivities of the discre
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
 import casadi as ca
 import numpy as np
 
@@ -20,18 +17,11 @@ __all__ = ["rk_step", "segment_function", "segment_trajectory_function", "ORDER"
 def _dop853_tableau():
     """SciPy's DOP853 coefficients (``scipy/integrate/_ivp/dop853_coefficients.py``, plain NumPy
     arrays), read without importing ``scipy.integrate`` (0.4 s at start-up)."""
-    try:
-        root = Path(importlib.util.find_spec("scipy").origin).parent
-        path = root / "integrate" / "_ivp" / "dop853_coefficients.py"
-        spec = importlib.util.spec_from_file_location("_gaitopt_dop853_coefficients", path)
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-        n = 12  # DOP853.n_stages
-        return module.A[:n, :n], module.B, module.C[:n]
-    except (AttributeError, OSError, TypeError):  # another SciPy layout: the public class
-        from scipy.integrate import DOP853
+    from .dop853_base import coefficients
 
-        return DOP853.A, DOP853.B, DOP853.C
+    module = coefficients()
+    n = module.N_STAGES  # 12: DOP853.n_stages
+    return module.A[:n, :n], module.B, module.C[:n]
 
 
 _A, _B, _C = (np.asarray(v, dtype=float) for v in _dop853_tableau())

@@ -11,9 +11,12 @@ to=0.09)``) took 103 s wall / 38 s CPU with two BLAS threads and 32 s / 7 s with
 ``bifurcation_curve``, ``optimize_gait``, ``gait_library``, ``basin``): while one runs, the BLAS
 libraries loaded in the process (NumPy's and SciPy's OpenBLAS, MKL, ...) use one thread, and the
 caller's setting is restored when it returns, so a user's own large matrix products elsewhere in
-the same process keep their threads.  Parallel work in gaitopt comes from processes (Dask
-workers), never from BLAS threads.  ``GAITOPT_BLAS_THREADS=N`` sets another count, ``0`` leaves
-BLAS alone.  Limits come from threadpoolctl (the library scikit-learn uses for the same purpose).
+the same process keep their threads; an OpenBLAS first loaded during such a call (SciPy's, where
+the call first imports ``scipy.linalg``) starts with the call's thread count
+(``OPENBLAS_NUM_THREADS`` is set while the call runs) and keeps it.  Parallel work in gaitopt
+comes from processes (Dask workers), never from BLAS threads.  ``GAITOPT_BLAS_THREADS=N`` sets
+another count, ``0`` leaves BLAS alone.  Limits come from threadpoolctl (the library
+scikit-learn uses for the same purpose).
 
 The ``gaitopt`` command is a process of its own: :func:`start_with_blas_threads` (called first
 in :func:`gaitopt.cli.main`, whose module imports no NumPy) sets ``OPENBLAS_NUM_THREADS`` (and
@@ -54,38 +57,53 @@ def blas_threads() -> int:
     return max(value, 0)
 
 
-def _load_scipy_blas() -> None:
-    """Load SciPy's bundled BLAS library (a wheel's ``scipy.libs/*openblas*.so``) without
-    importing :mod:`scipy.linalg` (0.2–0.5 s that a gait's solve may never need): the dynamic
-    loader gives SciPy's extension modules this same library when they are imported later, so
-    the limit set on it holds for them.  Where SciPy has no such bundled library (a system
-    SciPy linked to the system's BLAS), :mod:`scipy.linalg` is imported instead."""
-    import ctypes
-    import importlib.util
-    from pathlib import Path
+class _Limited:
+    """The limit of one entry point's call: every BLAS library loaded when it begins limited to
+    ``threads`` (threadpoolctl; restored when it ends), and ``OPENBLAS_NUM_THREADS`` set to
+    ``threads`` meanwhile, so that an OpenBLAS first loaded during the call (SciPy's, where the
+    call first imports ``scipy.linalg``) starts with that many threads: it keeps them after the
+    call (there was no caller's setting for it), and starts no idle worker threads.
 
-    import numpy  # noqa: F401  (NumPy's BLAS, loaded by every caller anyway)
+    SciPy's bundled OpenBLAS is not loaded in advance to be limited: a loaded OpenBLAS starts a
+    worker thread per further core, and each spins (``sched_yield``) for about 0.1 s before it
+    sleeps, a tenth of a second of CPU that the compass gait's first optimisation, which needs
+    no SciPy, would pay for nothing."""
 
-    try:
-        spec = importlib.util.find_spec("scipy")
-        libs = sorted((Path(spec.origin).parent.parent / "scipy.libs").glob("*openblas*.so*"))
-        for lib in libs:
-            ctypes.CDLL(str(lib))
-    except (AttributeError, TypeError, OSError):
-        libs = []
-    if not libs:
-        import scipy.linalg  # noqa: F401
+    def __init__(self, controller, threads: int):
+        self._controller, self._threads = controller, threads
+        self._limiter = None
+        self._environment: str | None = None
+
+    def __enter__(self) -> _Limited:
+        self._limiter = self._controller.limit(limits=self._threads, user_api="blas")
+        self._environment = os.environ.get(_OPENBLAS)
+        os.environ[_OPENBLAS] = str(self._threads)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._limiter.restore_original_limits()
+        if self._environment is None:
+            os.environ.pop(_OPENBLAS, None)
+        else:
+            os.environ[_OPENBLAS] = self._environment
 
 
-def _limits(threads: int):
-    """The threadpoolctl context limiting every loaded BLAS to ``threads`` threads."""
-    global _controller
-    if _controller is None:
-        _load_scipy_blas()  # SciPy's own BLAS: loaded, so that it is limited too
+_OPENBLAS = "OPENBLAS_NUM_THREADS"
+_scanned = -1  # len(sys.modules) when the controller last listed the loaded libraries
+
+
+def _limits(threads: int) -> _Limited:
+    """The context limiting every loaded BLAS to ``threads`` threads (and any OpenBLAS loaded
+    while it holds, :class:`_Limited`)."""
+    global _controller, _scanned
+    if _controller is None or _scanned != len(sys.modules):
+        # libraries come with imported extension modules: list them again after an import
+        # (about 0.3 ms), so that one loaded since (SciPy's) is limited and restored too
         from threadpoolctl import ThreadpoolController
 
         _controller = ThreadpoolController()
-    return _controller.limit(limits=threads, user_api="blas")
+        _scanned = len(sys.modules)
+    return _Limited(_controller, threads)
 
 
 def start_with_blas_threads() -> None:

@@ -69,11 +69,33 @@ def test_solve_path_imports_only_what_it_uses():
     if compiler() is None:
         pytest.skip("no C compiler: the simulation runs SciPy's stepper")
     solve = "import gaitopt\nassert gaitopt.find_limit_cycle(gaitopt.model('compass_gait')).success"
-    _modules_after(solve)  # the kernel cache warm (building kernels imports SciPy's DOP853 class)
+    _modules_after(solve)  # the kernel cache warm
     modules = _modules_after(solve)
     assert _under(modules, *_NOT_ON_THE_SOLVE_PATH, "scipy.integrate") == []
     model_files = {f"gaitopt.models.{module}" for module, _ in BUILTIN.values()}
     assert sorted(model_files & modules) == ["gaitopt.models.compass_gait"]
+
+
+def test_optimise_path_imports_no_scipy():
+    """The compass gait's optimum (level, 0.3 m in 0.8 s: ``bench.first_call``'s call), solved
+    and verified, imports none of SciPy: the referee and the finite-difference multipliers
+    simulate the input profile with :class:`gaitopt.dop853.CompiledDOP853` in SciPy's DOP853
+    frame restated (:mod:`gaitopt.dop853_base`), its crossings by :func:`gaitopt.brent.brentq`,
+    and the BLAS limit loads SciPy's OpenBLAS without ``scipy.linalg``."""
+    from gaitopt.kernels.cache import compiler
+
+    if compiler() is None:
+        pytest.skip("no C compiler: the guess's simulation runs SciPy's stepper")
+    optimise = (
+        "import gaitopt\n"
+        "g = gaitopt.optimize_gait(gaitopt.model('compass_gait', slope=0.0), period=0.8, "
+        "step_length=0.3)\n"
+        "assert g.success and g.verified and g.multipliers_fd is not None, g.message"
+    )
+    _modules_after(optimise)  # the kernel cache warm
+    modules = _modules_after(optimise)
+    assert _under(modules, "scipy.integrate", "scipy.optimize", "scipy.linalg") == []
+    assert _under(modules, "scipy") == []
 
 
 def test_cli_imports_the_chosen_subcommand_only():
@@ -144,21 +166,26 @@ def test_every_module_imports_in_a_fresh_process():
 
 
 def test_blas_limit_without_importing_scipy_linalg():
-    """:mod:`gaitopt.threads` limits SciPy's bundled BLAS without importing ``scipy.linalg``;
-    imported later, SciPy's extension modules get that same (limited) library."""
+    """:mod:`gaitopt.threads` limits the loaded BLAS without loading SciPy's (its OpenBLAS would
+    start a worker thread that spins for 0.1 s); an OpenBLAS loaded inside the limit (SciPy's,
+    by ``import scipy.linalg``) starts with the limit's thread count, and the environment is
+    restored after."""
     script = (
-        "import sys\n"
+        "import os, sys\n"
         "from threadpoolctl import threadpool_info\n"
         "from gaitopt.threads import _limits\n"
+        "def scipys(): return [i for i in threadpool_info() if 'scipy.libs' in i['filepath']]\n"
         "with _limits(1):\n"
-        "    before = 'scipy.linalg' in sys.modules\n"
+        "    before = 'scipy.linalg' in sys.modules or bool(scipys())\n"
         "    import scipy.linalg\n"
         "    inside = sorted({i['num_threads'] for i in threadpool_info() if i['user_api'] == "
         "'blas'})\n"
-        "print(before, inside)\n"
+        "    loaded = bool(scipys())\n"
+        "print(before, inside, loaded, os.environ.get('OPENBLAS_NUM_THREADS'))\n"
     )
     env = {**os.environ, "PYTHONPATH": str(ROOT.parent)}
+    env.pop("OPENBLAS_NUM_THREADS", None)
     out = subprocess.run(
         [sys.executable, "-c", script], capture_output=True, text=True, env=env, check=True
     ).stdout
-    assert out.strip() == "False [1]"
+    assert out.strip() == "False [1] True None"

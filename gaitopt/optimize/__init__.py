@@ -23,15 +23,34 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 from .collocation import Arc, Collocation, RadauMesh
 from .guess import WarmStartError
-from .library import GaitLibrary, gait_library
 from .problem import COSTS, GaitProblem
 from .profile import InputProfile
 from .result import Minimum, OptimalGait, StartRecord
 from .solve import optimize_gait, solve_problem
-from .stabilisation import Stabilisation, stabilise
 from .transcription import CollocationTranscription
+
+#: Bound on first use (PEP 562): an optimisation needs neither subpackage.
+_LAZY = {
+    "GaitLibrary": ".library",
+    "gait_library": ".library",
+    "Stabilisation": ".stabilisation",
+    "stabilise": ".stabilisation",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        from importlib import import_module
+
+        value = getattr(import_module(_LAZY[name], __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "optimize_gait",

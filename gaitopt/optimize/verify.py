@@ -199,7 +199,8 @@ def simulated_cost(problem: GaitProblem, model: Any, sim: Simulation, profs: lis
         prof = profs[step % len(profs)]
         inner = t_sec + prof.breaks
         inner = inner[(inner > arc.t0 + 1e-12) & (inner < arc.t1 - 1e-12)]
-        edges = np.unique(np.concatenate([np.linspace(arc.t0, arc.t1, 65), inner]))
+        edges = np.sort(np.concatenate([np.linspace(arc.t0, arc.t1, 65), inner]))
+        edges = edges[np.append(True, edges[1:] != edges[:-1])]  # np.unique without numpy.ma
         for a, b in zip(edges[:-1], edges[1:], strict=True):
             ts = (a + b) / 2 + (b - a) / 2 * nodes
             xs = arc.solution(ts)

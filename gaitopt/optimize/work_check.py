@@ -139,7 +139,8 @@ def simulated_work(
         inner = profile.breaks[
             (profile.breaks > arc.t0 + 1e-12) & (profile.breaks < arc.t1 - 1e-12)
         ]
-        edges = np.unique(np.concatenate([np.linspace(arc.t0, arc.t1, panels + 1), inner]))
+        edges = np.sort(np.concatenate([np.linspace(arc.t0, arc.t1, panels + 1), inner]))
+        edges = edges[np.append(True, edges[1:] != edges[:-1])]  # np.unique without numpy.ma
         for a, b in zip(edges[:-1], edges[1:], strict=True):
             ts = (a + b) / 2 + (b - a) / 2 * nodes
             xs = arc.solution(ts)

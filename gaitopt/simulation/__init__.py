@@ -4,8 +4,9 @@ This is deliberately independent of the shooting integrator (adaptive steps and 
 here, fixed-step shooting with guard constraints there), so each can check the other.
 
 The loop is SciPy's ``solve_ivp`` event logic (step, check signs, locate the root with ``brentq``
-on the step's dense output), driving :class:`scipy.integrate.DOP853` (or another ``OdeSolver``)
-step by step, with two additions that hybrid walking models need:
+on the step's dense output), driving SciPy's DOP853 (:class:`gaitopt.dop853.CompiledDOP853`: its
+frame restated in :mod:`gaitopt.dop853_base`, so that ``scipy.integrate`` is not imported; or
+another SciPy ``OdeSolver``) step by step, with two additions that hybrid walking models need:
 
 * *strict crossings*: a guard fires only after it has been strictly on its pre-crossing side in
   this phase (a phase that starts on a guard, such as Van der Pol's section, does not fire at
@@ -205,11 +206,9 @@ def simulate(
         step_parameters.append(changes)
         return model.replace(**changes).p
 
+    # SciPy's stepper class: imported by integrate_phase only where it runs (scipy.integrate:
+    # 0.3–0.5 s); DOP853 with a constant or vectorised input needs none (gaitopt.dop853)
     solver_cls = None
-    if library is None:  # SciPy's stepper (scipy.integrate: 0.3–0.5 s, imported when needed)
-        import scipy.integrate
-
-        solver_cls = getattr(scipy.integrate, method)
 
     sim = Simulation(False, "completed", "")
     sec_t: list[float] = []

@@ -5,7 +5,11 @@ Nørsett & Wanner's 7-coefficient DOP853 interpolant, *Solving ODEs I*, §II.6) 
 :class:`PiecewiseSolution` SciPy's ``OdeSolution.__call__`` for increasing time stamps
 (``scipy/integrate/_ivp/common.py``): the same operations in the same order, so an arc evaluates
 to the same bits as with SciPy's classes (tests/test_simulation_dense.py compares them).  Only
-the compiled simulation's arcs use them; SciPy's own classes remain those of the Python loop.
+the compiled simulation's arcs and the Python loop's DOP853 (:class:`gaitopt.dop853.CompiledDOP853`:
+a feedforward's simulation, the optimiser's referee) use them; SciPy's own classes remain those
+of its other methods (RK45, Radau, LSODA).  :class:`ConstantPiece` is SciPy's
+``ConstantDenseOutput`` (a step of zero length), :class:`Pieces` an ``OdeSolution`` of given
+pieces.
 """
 
 from __future__ import annotations
@@ -14,7 +18,7 @@ from itertools import groupby
 
 import numpy as np
 
-__all__ = ["Dop853Piece", "PiecewiseSolution"]
+__all__ = ["ConstantPiece", "Dop853Piece", "Pieces", "PiecewiseSolution"]
 
 
 class Dop853Piece:
@@ -58,6 +62,35 @@ class Dop853Piece:
         return y.T
 
 
+class ConstantPiece:
+    """A constant interpolant (SciPy's ``ConstantDenseOutput``: a step of zero length, or a
+    phase held at its start state).
+
+    Parameters
+    ----------
+    t_old, t : float
+        The interval's ends (s).
+    value : numpy.ndarray
+        The state held.
+    """
+
+    def __init__(self, t_old: float, t: float, value: np.ndarray):
+        self.t_old, self.t = t_old, t
+        self.t_min, self.t_max = min(t, t_old), max(t, t_old)
+        self.value = value
+
+    def __call__(self, t) -> np.ndarray:
+        """The state (n), or n × len(t) copies of it for a 1-D ``t``."""
+        t = np.asarray(t)
+        if t.ndim > 1:
+            raise ValueError("`t` must be a float or a 1-D array.")
+        if t.ndim == 0:
+            return self.value
+        out = np.empty((self.value.shape[0], t.shape[0]))
+        out[:] = self.value[:, None]
+        return out
+
+
 class PiecewiseSolution:
     """Pieces on consecutive, increasing time stamps, evaluated as SciPy's ``OdeSolution`` does
     (a time on a stamp belongs to the piece before it; outside, the first or last piece).
@@ -99,3 +132,33 @@ class PiecewiseSolution:
             ys.append(self.interpolants[segment](t_sorted[start:end]))
             start = end
         return np.hstack(ys)[:, reverse]
+
+
+class Pieces(PiecewiseSolution):
+    """SciPy's ``OdeSolution(ts, interpolants)`` for increasing time stamps (or the two equal
+    stamps of a zero-length arc).
+
+    Parameters
+    ----------
+    ts : array_like
+        The time stamps (s), strictly increasing, or two equal ones.
+    interpolants : list
+        One callable piece per interval (``len(ts) − 1``).
+    """
+
+    def __init__(self, ts, interpolants: list):
+        ts = np.asarray(ts)
+        d = np.diff(ts)
+        if not ((ts.size == 2 and ts[0] == ts[-1]) or np.all(d > 0)):
+            raise ValueError("`ts` must be strictly increasing.")
+        self.n_segments = len(interpolants)
+        if ts.shape != (self.n_segments + 1,):
+            raise ValueError("Numbers of time stamps and interpolants don't match.")
+        self.ts = ts
+        self._pieces = interpolants
+        self.t_min, self.t_max = ts[0], ts[-1]
+
+    @property
+    def interpolants(self) -> list:
+        """The pieces."""
+        return self._pieces

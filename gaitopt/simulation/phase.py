@@ -139,8 +139,9 @@ class PhaseFunctions:
         breaks = getattr(feedforward, "breaks", None)
         local = np.zeros(0)
         if callable(breaks):
-            local = np.unique(np.asarray(breaks(step), dtype=float).ravel())
-            local = local[local > 0]
+            local = np.sort(np.asarray(breaks(step), dtype=float).ravel())
+            # the distinct breaks after 0 (np.unique's values, without its import of numpy.ma)
+            local = local[(local > 0) & np.append(True, local[1:] != local[:-1])]
         before = np.nextafter(local, -np.inf)  # the last time before each break
 
         def drive(times: np.ndarray, stop: int | None) -> np.ndarray:
@@ -271,7 +272,8 @@ def locate_crossing(g: Callable[[float], float], a: float, b: float) -> float:
 
     The caller has found ``g < 0`` at ``a`` and ``g >= 0`` at ``b`` (an integrator step's check
     points, ``a`` at least the arc's last time stamp); ``g`` is evaluated on the step's dense
-    output.  The root is located by ``brentq`` (``xtol`` 1e-15, ``rtol`` 4 eps), with three
+    output.  The root is located by ``brentq`` (``xtol`` 1e-15, ``rtol`` 4 eps; SciPy's,
+    restated in :func:`gaitopt.brent.brentq` to the bit without importing SciPy), with three
     cases at the ends, where floating point decides:
 
     * brentq's answer may be ``a`` itself: its tolerance (a few ulps) admits the end with the
@@ -300,7 +302,7 @@ def locate_crossing(g: Callable[[float], float], a: float, b: float) -> float:
     float
         The crossing time, ``a < t <= b``.
     """
-    from scipy.optimize import brentq
+    from ..brent import brentq
 
     if not g(b) >= 0:
         return b
@@ -323,10 +325,9 @@ def locate_crossing(g: Callable[[float], float], a: float, b: float) -> float:
 
 def _held(t0: float, x0: np.ndarray):
     """A zero-length arc at ``t0`` holding ``x0`` (a phase whose first step failed)."""
-    from scipy.integrate import OdeSolution
-    from scipy.integrate._ivp.base import ConstantDenseOutput
+    from .dense import ConstantPiece, Pieces
 
-    return OdeSolution([t0, t0], [ConstantDenseOutput(t0, t0, np.asarray(x0, dtype=float))])
+    return Pieces([t0, t0], [ConstantPiece(t0, t0, np.asarray(x0, dtype=float))])
 
 
 # Interior points per integrator step where the guards are also checked (see
@@ -342,8 +343,14 @@ def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_t
     ``_CHECKS_PER_STEP - 1`` interior points of each step, roots located by ``brentq`` on the
     step's dense output (:func:`locate_crossing`: a time after the bracket's start, so an arc's
     time stamps increase strictly).  An integrator failure is returned as the status
-    ``"failed"`` with the arc integrated so far."""
-    from scipy.integrate import OdeSolution
+    ``"failed"`` with the arc integrated so far.
+
+    ``solver_cls`` is SciPy's ``OdeSolver`` class of ``method``, or None: imported here only
+    where it runs (another method than DOP853, or a state feedback or plain-callable
+    feedforward); DOP853 with a constant or vectorised input runs
+    :class:`gaitopt.dop853.CompiledDOP853`, which needs no :mod:`scipy.integrate`.  The arc is
+    an ``OdeSolution`` of the steps' interpolants (:class:`gaitopt.simulation.dense.Pieces`)."""
+    from .dense import Pieces as OdeSolution  # SciPy's OdeSolution for increasing stamps
 
     n_tr = funcs.events
     drive = funcs.vectorised_drive()  # a feedforward evaluated at a step's times at once
@@ -360,6 +367,10 @@ def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_t
         solver = CompiledDOP853(funcs.rhs, step, funcs.u, funcs.p, t0, x0, t0 + max_time,
                                 rtol=rtol, atol=atol, **(drive or {}))  # fmt: skip
     else:
+        if solver_cls is None:  # SciPy's stepper (scipy.integrate: 0.3–0.5 s on first use)
+            import scipy.integrate
+
+            solver_cls = getattr(scipy.integrate, method)
         kwargs = {"jac": funcs.jac} if method in ("Radau", "LSODA") else {}
         solver = solver_cls(funcs.rhs, t0, x0, t0 + max_time, rtol=rtol, atol=atol, **kwargs)
     directions = np.array(funcs._directions, dtype=float)[:, None]

@@ -24,8 +24,11 @@ class Arc:
         Index of the phase in ``model.phases``.
     t0, t1 : float
         Start and end time (s).
-    solution : scipy.integrate.OdeSolution
-        Dense output on ``[t0, t1]``.
+    solution : OdeSolution-like
+        Dense output on ``[t0, t1]``: ``solution(t)`` is the state at ``t`` (s) or, for a 1-D
+        ``t``, states × times, with SciPy's ``OdeSolution`` attributes ``ts``,
+        ``interpolants``, ``t_min``, ``t_max`` (:mod:`gaitopt.simulation.dense`, which restates
+        SciPy's classes to the bit).
     u : numpy.ndarray
         Per-step input in force during the arc.
     """
