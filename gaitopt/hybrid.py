@@ -240,10 +240,29 @@ class HybridModel:
         key (:func:`gaitopt.kernels.cache.remembered`): a later process unpickles it (the same
         CasADi graphs) instead of building it, several times faster."""
         if cls not in HybridModel._cache:
-            from .kernels.cache import remembered
+            if cls._may_remember_structure():
+                from .kernels.cache import remembered
 
-            HybridModel._cache[cls] = remembered("structure", cls, cls._build_structure)
+                HybridModel._cache[cls] = remembered("structure", cls, cls._build_structure)
+            else:
+                HybridModel._cache[cls] = cls._build_structure()
         return HybridModel._cache[cls]
+
+    @classmethod
+    def _may_remember_structure(cls) -> bool:
+        """Whether the structure may be unpickled instead of built: only for a built-in model's
+        own class (``gaitopt.models.BUILTIN``; a class made at run time — an HZD closed loop, an
+        optimum's feedforward — is named alike for different contents) whose :meth:`build` has
+        no side effects (``remember_structure = False`` declares that it fills tables of its
+        own, e.g. the three-link walker's output functions)."""
+        from .models import BUILTIN
+
+        if not cls.__dict__.get("remember_structure", True):
+            return False
+        return any(
+            cls.__module__ == f"gaitopt.models.{module}" and cls.__qualname__ == name
+            for module, name in BUILTIN.values()
+        )
 
     @classmethod
     def _build_structure(cls) -> Structure:

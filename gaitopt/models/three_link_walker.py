@@ -284,6 +284,10 @@ class ThreeLinkWalker(HybridModel):
         doc="stance-leg angle θ_i at the impact (θ1 = θ_i rising ends the step)", source=_GRIZZLE,
     )  # fmt: skip
 
+    #: build() fills this module's tables of output and plant functions (``_FUNCTIONS``), so its
+    #: structure is built in every process, never unpickled (:meth:`HybridModel.structure`).
+    remember_structure = False
+
     @classmethod
     def build(cls, sym: Symbols) -> tuple[tuple[Phase, ...], Section]:
         x, states = sym.states(*STATE_NAMES)
