@@ -19,6 +19,7 @@ of a built structure in :mod:`gaitopt.model_checks`; all are importable from her
 from __future__ import annotations
 
 import dataclasses
+import sys
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -251,17 +252,16 @@ class HybridModel:
     @classmethod
     def _may_remember_structure(cls) -> bool:
         """Whether the structure may be unpickled instead of built: only for a built-in model's
-        own class (``gaitopt.models.BUILTIN``; a class made at run time — an HZD closed loop, an
-        optimum's feedforward — is named alike for different contents) whose :meth:`build` has
-        no side effects (``remember_structure = False`` declares that it fills tables of its
-        own, e.g. the three-link walker's output functions)."""
-        from .models import BUILTIN
-
+        own class (defined at the top of a module of ``gaitopt.models``; a class made at run
+        time — an HZD closed loop, an optimum's feedforward — is named alike for different
+        contents) whose :meth:`build` has no side effects (``remember_structure = False``
+        declares that it fills tables of its own, e.g. the three-link walker's output
+        functions)."""
         if not cls.__dict__.get("remember_structure", True):
             return False
-        return any(
-            cls.__module__ == f"gaitopt.models.{module}" and cls.__qualname__ == name
-            for module, name in BUILTIN.values()
+        module = sys.modules.get(cls.__module__)
+        return cls.__module__.startswith("gaitopt.models.") and (
+            getattr(module, cls.__qualname__, None) is cls
         )
 
     @classmethod
