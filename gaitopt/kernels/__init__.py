@@ -24,7 +24,7 @@ from functools import lru_cache
 
 import casadi as ca
 
-from .cache import cache_dir, load, source_key
+from .cache import cache_dir, compiler, load, source_key
 from .symbolic import kernel_functions, step_functions
 
 __all__ = [
@@ -45,7 +45,7 @@ class ModelKernels:
         name = f"gaitopt_{model_cls.__name__.lower()}"
         loaded, self.compiled = load(
             name,
-            lambda: kernel_functions(model_cls),
+            lambda: kernel_functions(model_cls, staged=compiler() is not None),
             verbose=verbose,
             key=source_key(name, model_cls),
         )
