@@ -24,7 +24,7 @@ from functools import lru_cache
 
 import casadi as ca
 
-from .cache import cache_dir, compiler, load, source_key
+from .cache import FLAGS, FLAGS_O2, cache_dir, compiler, load, source_key
 from .symbolic import kernel_functions, step_functions
 
 __all__ = [
@@ -48,6 +48,7 @@ class ModelKernels:
             lambda: kernel_functions(model_cls, staged=compiler() is not None),
             verbose=verbose,
             key=source_key(name, model_cls),
+            flags=_flags,
         )
         self.lift = loaded[0]
         self.fold = loaded[1::2]
@@ -55,6 +56,12 @@ class ModelKernels:
         self.n = [f.size1_in(0) for f in self.fold]
         self.n_u = len(model_cls.inputs)
         self.n_p = len(model_cls.parameter_specs())
+
+
+def _flags(functions: list[ca.Function]) -> tuple[str, ...]:
+    """-O2 for a library with a staged fold (an MX function: its stages' glue runs in loops,
+    40 % slower at -O1), else :data:`~gaitopt.kernels.cache.FLAGS`."""
+    return FLAGS_O2 if any(f.is_a("MXFunction") for f in functions) else FLAGS
 
 
 @lru_cache(maxsize=64)
