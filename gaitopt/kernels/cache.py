@@ -1,11 +1,13 @@
-"""Compiled kernels with a disk cache: CasADi codegen, ``gcc -O1 -shared -fPIC``, ``ca.external``.
+"""Compiled kernels with a disk cache: CasADi codegen, ``gcc -O1 -shared -fPIC`` (or the flags a
+caller chooses for a library, :func:`load`'s ``flags``), ``ca.external``.
 
 The cache directory is ``$GAITOPT_CACHE``, else ``$XDG_CACHE_HOME/gaitopt``, else
 ``~/.cache/gaitopt``.  A library is named by a hash of everything that determines its code: the
 generated C source, the CasADi version, the compiler (resolved path, size and modification time)
-and the flags; so a changed model, CasADi or compiler gets a new library and a stale one is
-never loaded.  Two processes compiling the same kernel at once are safe: each compiles to its own
-temporary file in the cache directory and renames it into place atomically (:func:`os.replace`).
+and the library's flags; so a changed model, CasADi, compiler or flag gets a new library and a
+stale one is never loaded.  Two processes compiling the same kernel at once are safe: each
+compiles to its own temporary file in the cache directory and renames it into place atomically
+(:func:`os.replace`).
 
 Finding a library by that hash means generating the C source, which takes longer than loading the
 library (0.1–0.6 s per model class).  So each library is also listed in an index under a *source
