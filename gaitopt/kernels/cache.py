@@ -127,7 +127,7 @@ def load(
     *,
     verbose: bool = True,
     key: str | None = None,
-    flags: Callable[[list[ca.Function]], tuple[str, ...]] | None = None,
+    flags: Callable[[list[ca.Function], str], tuple[str, ...]] | None = None,
 ) -> tuple[list[ca.Function], bool]:
     """The ``functions`` compiled into one shared library (from the cache when present), loaded
     with ``ca.external``; the interpreted functions themselves where there is no compiler or
@@ -135,7 +135,7 @@ def load(
 
     ``functions`` may be a callable that builds them, called only when needed: with ``key``
     (from :func:`source_key`) a library listed in the index is loaded without building them.
-    ``flags(functions)`` chooses the compiler flags (default :data:`FLAGS`).  Returns the
+    ``flags(functions, source)`` chooses the compiler flags (default :data:`FLAGS`).  Returns the
     functions and whether they are compiled.
     """
     if key is not None:
@@ -151,7 +151,7 @@ def load(
     for f in functions:
         gen.add(f)
     source = gen.dump()
-    chosen = FLAGS if flags is None else flags(functions)
+    chosen = FLAGS if flags is None else flags(functions, source)
     directory = cache_dir()
     library = directory / f"{name}_{_key(source, cc, chosen)}.so"
     if not library.exists():
