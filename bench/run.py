@@ -68,6 +68,7 @@ from . import branches as _bench_branches
 from . import curves as _bench_curves
 from . import first_call as _bench_first_call
 from . import goals as _bench_goals
+from . import install_compile as _bench_install_compile
 from . import optimize as _bench_optimize
 from . import simulate as _bench_simulate
 from . import speed as _bench_speed
@@ -101,6 +102,7 @@ def run(
     speed: bool = True,
     basin: bool = True,
     quick: bool = False,
+    install_compile: bool = False,
     log: Callable[[str], None] = lambda s: print(s, file=sys.stderr, flush=True),
 ) -> dict[str, Any]:
     """Measure everything; the JSON-ready record (see the module docstring)."""
@@ -201,6 +203,11 @@ def run(
             record["basin"] = _bench_basin.run(quick=quick, rounds=1 if quick else 3)
         except Exception as err:  # report, never sink the benchmark
             record["basin"] = {"skipped": f"{type(err).__name__}: {err}"}
+    if install_compile:  # 5–10 min of CPU: only when asked; else the latest recorded run
+        log("[bench] the kernel compile of make install from an empty cache")
+        record["install_compile"] = _bench_install_compile.run()
+    else:
+        record["install_compile"] = _bench_install_compile.latest()
     record["goals_issue_12"] = _bench_speed.goals(record)
     log("[bench] issue 23's goals: whole processes vs the baseline's, sweep vs bare Dask")
     record["goals_issue_23_measured"] = _bench_goals.measure(
@@ -264,6 +271,12 @@ def main(argv: list[str] | None = None) -> int:
         "--no-basin", action="store_true", help="skip the basin throughput (batch vs loop)"
     )
     parser.add_argument(
+        "--install-compile",
+        action="store_true",
+        help="measure the kernel compile from an empty cache too (5-10 min; default: the "
+        "latest results/bench_install_compile.json)",
+    )
+    parser.add_argument(
         "--quick",
         action="store_true",
         help="2 repeats, 5 calls once built, no Drake convergence runs",
@@ -292,6 +305,7 @@ def main(argv: list[str] | None = None) -> int:
         speed=not args.no_speed,
         basin=not args.no_basin,
         quick=args.quick,
+        install_compile=args.install_compile,
     )
     record["table"] = rows(record)
     args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -1,11 +1,13 @@
-"""Compiled kernels with a disk cache: CasADi codegen, ``gcc -O1 -shared -fPIC``, ``ca.external``.
+"""Compiled kernels with a disk cache: CasADi codegen, ``gcc -O1 -shared -fPIC`` (or the flags a
+caller chooses for a library, :func:`load`'s ``flags``), ``ca.external``.
 
 The cache directory is ``$GAITOPT_CACHE``, else ``$XDG_CACHE_HOME/gaitopt``, else
 ``~/.cache/gaitopt``.  A library is named by a hash of everything that determines its code: the
 generated C source, the CasADi version, the compiler (resolved path, size and modification time)
-and the flags; so a changed model, CasADi or compiler gets a new library and a stale one is
-never loaded.  Two processes compiling the same kernel at once are safe: each compiles to its own
-temporary file in the cache directory and renames it into place atomically (:func:`os.replace`).
+and the library's flags; so a changed model, CasADi, compiler or flag gets a new library and a
+stale one is never loaded.  Two processes compiling the same kernel at once are safe: each
+compiles to its own temporary file in the cache directory and renames it into place atomically
+(:func:`os.replace`).
 
 Finding a library by that hash means generating the C source, which takes longer than loading the
 library (0.1–0.6 s per model class).  So each library is also listed in an index under a *source
@@ -42,10 +44,13 @@ try:  # CPython's own SHA-256: no OpenSSL library to load at start (the same dig
 except ImportError:  # another Python: hashlib's
     from hashlib import sha256
 
-__all__ = ["cache_dir", "compiler", "load", "remembered", "source_key", "FLAGS"]
+__all__ = ["cache_dir", "compiler", "load", "remembered", "source_key", "FLAGS", "FLAGS_O2"]
 
 #: Compiler flags: -O1 compiles the step kernels in seconds and runs them within ~10 % of -O3.
 FLAGS = ("-O1", "-shared", "-fPIC")
+#: For a library of small functions whose work is in loops over vectors (the staged folds,
+#: :data:`gaitopt.kernels.symbolic.STAGED_ABOVE`): -O1 runs them 40 % slower than -O2.
+FLAGS_O2 = ("-O2", "-shared", "-fPIC")
 #: Seconds a compile may take before the functions are interpreted instead.
 _COMPILE_TIMEOUT = 600
 
@@ -65,10 +70,10 @@ def compiler() -> str | None:
     return shutil.which(os.environ.get("GAITOPT_CC", "gcc"))
 
 
-def _key(source: str, cc: str) -> str:
+def _key(source: str, cc: str, flags: tuple[str, ...] = FLAGS) -> str:
     stat = os.stat(cc)
     ident = "\n".join(
-        [source, ca.__version__, cc, str(stat.st_size), str(stat.st_mtime_ns), " ".join(FLAGS)]
+        [source, ca.__version__, cc, str(stat.st_size), str(stat.st_mtime_ns), " ".join(flags)]
     )
     return sha256(ident.encode()).hexdigest()[:24]
 
@@ -228,6 +233,7 @@ def load(
     *,
     verbose: bool = True,
     key: str | None = None,
+    flags: Callable[[list[ca.Function], str], tuple[str, ...]] | None = None,
 ) -> tuple[list[ca.Function], bool]:
     """The ``functions`` compiled into one shared library (from the cache when present), loaded
     with ``ca.external``; the interpreted functions themselves where there is no compiler or
@@ -235,7 +241,8 @@ def load(
 
     ``functions`` may be a callable that builds them, called only when needed: with ``key``
     (from :func:`source_key`) a library listed in the index is loaded without building them.
-    Returns the functions and whether they are compiled.
+    ``flags(functions, source)`` chooses the compiler flags (default :data:`FLAGS`).  Returns the
+    functions and whether they are compiled.
     """
     if key is not None:
         found = _from_index(key)
@@ -250,13 +257,14 @@ def load(
     for f in functions:
         gen.add(f)
     source = gen.dump()
+    chosen = FLAGS if flags is None else flags(functions, source)
     directory = cache_dir()
-    library = directory / f"{name}_{_key(source, cc)}.so"
+    library = directory / f"{name}_{_key(source, cc, chosen)}.so"
     if not library.exists():
         import subprocess  # here: a warm start compiles nothing
 
         try:
-            _compile(source, cc, library, name, verbose)
+            _compile(source, cc, library, name, verbose, chosen)
         except (OSError, subprocess.SubprocessError) as exc:
             if verbose:
                 print(
@@ -274,7 +282,9 @@ def load(
     return loaded, True
 
 
-def _compile(source: str, cc: str, library: Path, name: str, verbose: bool) -> None:
+def _compile(
+    source: str, cc: str, library: Path, name: str, verbose: bool, flags: tuple[str, ...] = FLAGS
+) -> None:
     import signal
     import subprocess
     import tempfile
@@ -291,7 +301,7 @@ def _compile(source: str, cc: str, library: Path, name: str, verbose: bool) -> N
         # Its own process group: on a timeout the compiler proper (cc1) is ended with the driver,
         # not left running as an orphan.
         proc = subprocess.Popen(
-            [cc, *FLAGS, tmp_c, "-o", tmp_so, "-lm"],
+            [cc, *flags, tmp_c, "-o", tmp_so, "-lm"],
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
             start_new_session=True,

@@ -24,7 +24,7 @@ from ..kernels.verify import CHECKS_PER_STEP, phase_events
 from .phase import _ARM, _CONSTRAINT_START
 from .vectorised import brentq
 
-__all__ = ["ITERATIONS", "compiled_functions", "event_functions", "scan_crossings"]
+__all__ = ["ITERATIONS", "compiled_functions", "event_functions", "scan_crossings", "staged_brent"]
 
 #: Brent iterations unrolled in the compiled locator (the dense-output guards here mostly take
 #: 6–10; a row that needs more is finished in NumPy).
@@ -88,6 +88,10 @@ def compiled_functions(model_cls) -> list[dict[str, list]]:
         functions = []
         for i, role, j in slots:
             f = layout[i][role][j]
+            if role == "brents" and f.is_a("SXFunction"):  # one iteration's code, called 12×
+                probe = layout[i]["probes"][j]
+                g = ca.Function("g", probe.sx_in(), probe.call(probe.sx_in())[:1])
+                f = staged_brent(f, g)
             args = f.sx_in() if f.is_a("SXFunction") else f.mx_in()
             functions.append(ca.Function(f"batch_{i}_{role}_{j}", args, f.call(args),
                                          f.name_in(), f.name_out()))  # fmt: skip
@@ -143,38 +147,79 @@ def event_functions(phase, flow_n: int, n_u: int, n_p: int) -> tuple[list, list]
     return probes, brents
 
 
+def _brent_start(g, a, b, S) -> list:
+    """The state of SciPy's ``brentq`` before its first iteration on ``g`` over ``[a, b]``:
+    ``[xpre, xcur, xblk, fpre, fcur, fblk, spre, scur, root, done]``."""
+    fpre, fcur = g(a), g(b)
+    zero = S(0.0)
+    done = (fpre == 0) + (fcur == 0) > 0
+    return [a, b, zero, fpre, fcur, zero, zero, zero, ca.if_else(fpre == 0, a, b), done]
+
+
+def _brent_iteration(g, state: list) -> list:
+    """One iteration of SciPy's ``brentq`` C code (its ``scipy/optimize/Zeros/brentq.c``) on
+    ``g``: the state after it (see :func:`_brent_start`)."""
+    sel = ca.if_else
+    xpre, xcur, xblk, fpre, fcur, fblk, spre, scur, root, done = state
+    new = ((fpre != 0) * (fcur != 0) * ((fpre < 0) != (fcur < 0))) > 0
+    xblk, fblk = sel(new, xpre, xblk), sel(new, fpre, fblk)
+    spre, scur = sel(new, xcur - xpre, spre), sel(new, xcur - xpre, scur)
+    swap = ca.fabs(fblk) < ca.fabs(fcur)
+    xpre, xcur, xblk = sel(swap, xcur, xpre), sel(swap, xblk, xcur), sel(swap, xcur, xblk)
+    fpre, fcur, fblk = sel(swap, fcur, fpre), sel(swap, fblk, fcur), sel(swap, fcur, fblk)
+    delta = (_XTOL + _RTOL * ca.fabs(xcur)) / 2
+    sbis = (xblk - xcur) / 2
+    conv = ((fcur == 0) + (ca.fabs(sbis) < delta)) > 0
+    root = sel((1 - done) * conv > 0, xcur, root)
+    done = (done + conv) > 0
+    stry_i = -fcur * (xcur - xpre) / (fcur - fpre)
+    dpre = (fpre - fcur) / (xpre - xcur)
+    dblk = (fblk - fcur) / (xblk - xcur)
+    stry_e = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre))
+    stry = sel(xpre == xblk, stry_i, stry_e)
+    tried = (ca.fabs(spre) > delta) * (ca.fabs(fcur) < ca.fabs(fpre))
+    good = (tried * (2 * ca.fabs(stry) < ca.fmin(ca.fabs(spre), 3 * ca.fabs(sbis) - delta))) > 0
+    spre, scur = sel(good, scur, sbis), sel(good, stry, sbis)
+    xpre, fpre = xcur, fcur
+    xcur = sel(ca.fabs(scur) > delta, xcur + scur, xcur + sel(sbis > 0, delta, -delta))
+    fcur = g(xcur)
+    return [xpre, xcur, xblk, fpre, fcur, fblk, spre, scur, root, done]
+
+
 def _brent(g, a, b, S):
     """SciPy's ``brentq`` C iteration on ``g`` over ``[a, b]``, unrolled (``S``: SX or MX)."""
-    sel = ca.if_else
-    xpre, xcur = a, b
-    fpre, fcur = g(a), g(b)
-    xblk = fblk = spre = scur = S(0.0)
-    done = (fpre == 0) + (fcur == 0) > 0
-    root = sel(fpre == 0, a, b)
+    state = _brent_start(g, a, b, S)
     for _ in range(ITERATIONS):
-        new = ((fpre != 0) * (fcur != 0) * ((fpre < 0) != (fcur < 0))) > 0
-        xblk, fblk = sel(new, xpre, xblk), sel(new, fpre, fblk)
-        spre, scur = sel(new, xcur - xpre, spre), sel(new, xcur - xpre, scur)
-        swap = ca.fabs(fblk) < ca.fabs(fcur)
-        xpre, xcur, xblk = sel(swap, xcur, xpre), sel(swap, xblk, xcur), sel(swap, xcur, xblk)
-        fpre, fcur, fblk = sel(swap, fcur, fpre), sel(swap, fblk, fcur), sel(swap, fcur, fblk)
-        delta = (_XTOL + _RTOL * ca.fabs(xcur)) / 2
-        sbis = (xblk - xcur) / 2
-        conv = ((fcur == 0) + (ca.fabs(sbis) < delta)) > 0
-        root = sel((1 - done) * conv > 0, xcur, root)
-        done = (done + conv) > 0
-        stry_i = -fcur * (xcur - xpre) / (fcur - fpre)
-        dpre = (fpre - fcur) / (xpre - xcur)
-        dblk = (fblk - fcur) / (xblk - xcur)
-        stry_e = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre))
-        stry = sel(xpre == xblk, stry_i, stry_e)
-        tried = (ca.fabs(spre) > delta) * (ca.fabs(fcur) < ca.fabs(fpre))
-        good = (tried * (2 * ca.fabs(stry) < ca.fmin(ca.fabs(spre), 3 * ca.fabs(sbis) - delta))) > 0
-        spre, scur = sel(good, scur, sbis), sel(good, stry, sbis)
-        xpre, fpre = xcur, fcur
-        xcur = sel(ca.fabs(scur) > delta, xcur + scur, xcur + sel(sbis > 0, delta, -delta))
-        fcur = g(xcur)
-    return root, done
+        state = _brent_iteration(g, state)
+    return state[8], state[9]
+
+
+def staged_brent(brent: ca.Function, g: ca.Function) -> ca.Function:
+    """``brent`` (an SX function of :func:`event_functions`) for compiling: one iteration an SX
+    function called :data:`ITERATIONS` times (MX) rather than the iterations inlined.
+
+    The same operations in the same order, so the same numbers; the generated C holds one
+    iteration instead of 12 (the locators were most of the batch library's code and of its
+    compile time).  ``g``: ``g(F, y_old, t_old, h, t, u, p)``, the signed event function on
+    the dense output."""
+    F, y_old, t_old, h, t, u, p = g.sx_in()
+    state = ca.SX.sym("state", 10)
+
+    def g_sx(time):
+        return g(F, y_old, t_old, h, time, u, p)
+
+    after = _brent_iteration(g_sx, ca.vertsplit(state))
+    step = ca.Function("brent_iteration", [state, F, y_old, t_old, h, u, p], [ca.vertcat(*after)])
+    args = brent.mx_in()  # F, y_old, t_old, h, lo, hi, u, p
+    Fm, yom, tom, hm, lo, hi, um, pm = args
+
+    def g_mx(time):
+        return g(Fm, yom, tom, hm, time, um, pm)
+
+    x = ca.vertcat(*_brent_start(g_mx, lo, hi, ca.MX))
+    for _ in range(ITERATIONS):
+        x = step(x, Fm, yom, tom, hm, um, pm)
+    return ca.Function(brent.name(), args, [x[8], x[9]], brent.name_in(), brent.name_out())
 
 
 def scan_crossings(run, ph, i, c, t_old, t_new, y_old, y_new, F, signed, best):
