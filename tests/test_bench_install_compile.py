@@ -3,14 +3,15 @@ install`` measured from an empty cache, written, read back and shown in the goal
 
 from __future__ import annotations
 
-import shutil
-
 import pytest
 
 from bench import goals, install_compile
+from gaitopt.kernels.cache import compiler
 
 
-@pytest.mark.skipif(shutil.which("gcc") is None, reason="no C compiler: nothing is compiled")
+@pytest.mark.skipif(
+    compiler() is None, reason="no C compiler ($GAITOPT_CC, default gcc): nothing is compiled"
+)
 def test_install_compile_fast_mode_round_trip(tmp_path, capsys):
     out = tmp_path / "install.json"
     assert install_compile.main(["--jobs", "1", "--out", str(out), "vanderpol"]) == 0
