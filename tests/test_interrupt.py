@@ -99,9 +99,20 @@ def test_ctrl_c_while_continue_computes_keeps_an_existing_out_folder_as_it_was(t
     out.mkdir()
     (out / "branch.json").write_text('{"from": "an earlier run"}')
     (out / "notes.txt").write_text("mine")
+    # The continuation itself now takes well under a second, so no fixed delay lands inside it:
+    # the child runs it for real and then stays inside the call (before the CLI writes anything)
+    # until the signal comes, saying on stderr when it is there.
     code = (
-        "import sys\n"
+        "import sys, time\n"
         "from gaitopt.cli import main\n"
+        "from gaitopt.cli import continue_\n"
+        "follow = continue_.continuation\n"
+        "def held(*args, **kwargs):\n"
+        "    branch = follow(*args, **kwargs)\n"
+        "    print('computed', file=sys.stderr, flush=True)\n"
+        "    while True:\n"
+        "        time.sleep(0.01)\n"
+        "continue_.continuation = held\n"
         "print('started', file=sys.stderr, flush=True)\n"
         "sys.exit(main(sys.argv[1:]))\n"
     )
@@ -113,7 +124,10 @@ def test_ctrl_c_while_continue_computes_keeps_an_existing_out_folder_as_it_was(t
     )  # fmt: skip
     try:
         assert proc.stderr.readline() == "started\n"  # imports done: main() is running
-        time.sleep(1.0)  # into the continuation (it takes several seconds)
+        lines = []
+        while not lines or lines[-1] != "computed\n":  # the branch computed, nothing written
+            lines.append(proc.stderr.readline())
+            assert lines[-1], f"the child ended before it was interrupted: {lines}"
         assert proc.poll() is None, "the continuation ended before it was interrupted"
         status, stdout, stderr = _interrupt(proc)
     finally:
