@@ -47,7 +47,7 @@ import numpy as np
 
 from ..hybrid import rate_along
 from .radau import BOUNDARY, HELD, Arc
-from .state_arcs import guard_functions
+from .state_arcs import arc_edges, guard_functions
 
 __all__ = [
     "boundary_nodes",
@@ -200,12 +200,8 @@ def boundary_rows(col: Any, add: Any, k: int, i: int, Xk: Any, Uk: Any, p: Any, 
 def boundary_spans(col: Any, w: np.ndarray, p: np.ndarray) -> list[str]:
     """The boundary arcs of a solved transcription with their times (s since the section):
     ``"knee_torque holds the 'knee strike' guard on [0, 0.0473] s"``; empty without one."""
-    if col.structure is None:
-        return []
-    sol = col.unpack(w, p)
-    out, t0 = [], 0.0
-    for k, arcs in enumerate(col.structure):
-        edges = t0 + sol["T"][k] * np.concatenate([[0.0], np.cumsum(col.theta_of(w, k))])
+    out = []
+    for k, arcs, edges in arc_edges(col, w, p):
         name = col.model.phases[col.chain[k]].transitions[0].name
         spans: list[list[float]] = []
         for a, arc in enumerate(arcs):
@@ -220,5 +216,4 @@ def boundary_spans(col: Any, w: np.ndarray, p: np.ndarray) -> list[str]:
                 f"{col.model.inputs[int(r)]} holds the '{name}' guard on "
                 f"[{edges[int(first)]:.6g}, {edges[int(last)]:.6g}] s"
             )
-        t0 += sol["T"][k]
     return out

@@ -296,16 +296,27 @@ def describe_touches(structure: list[list[Arc]] | None, labels: list[str]) -> li
     return out
 
 
-def touch_times(col: Any, w: np.ndarray, p: np.ndarray) -> list[str]:
-    """The touch points of a solved transcription with their times (s since the section):
-    ``"stance knee flexion >= 0 at 0.651808 s"``; empty without touches."""
+def arc_edges(col: Any, w: np.ndarray, p: np.ndarray) -> list[tuple[int, Any, np.ndarray]]:
+    """Per phase of a solved transcription with arcs: ``(k, arcs, edges)``, the edges the arcs'
+    start and end times (s since the section, len(arcs) + 1); empty without arcs."""
     if col.structure is None:
         return []
     sol = col.unpack(w, p)
     out, t0 = [], 0.0
     for k, arcs in enumerate(col.structure):
-        edges = t0 + sol["T"][k] * np.concatenate([[0.0], np.cumsum(col.theta_of(w, k))])
-        for a, arc in enumerate(arcs):
-            out.extend(f"{name} at {edges[a + 1]:.6g} s" for name in arc.touches)
+        out.append(
+            (k, arcs, t0 + sol["T"][k] * np.concatenate([[0.0], np.cumsum(col.theta_of(w, k))]))
+        )
         t0 += sol["T"][k]
     return out
+
+
+def touch_times(col: Any, w: np.ndarray, p: np.ndarray) -> list[str]:
+    """The touch points of a solved transcription with their times (s since the section):
+    ``"stance knee flexion >= 0 at 0.651808 s"``; empty without touches."""
+    return [
+        f"{name} at {edges[a + 1]:.6g} s"
+        for _, arcs, edges in arc_edges(col, w, p)
+        for a, arc in enumerate(arcs)
+        for name in arc.touches
+    ]
