@@ -188,6 +188,24 @@ def constrained_impact_velocity(
     return _plastic(mass_matrix(masses, q), J, qd)
 
 
+def _floating(
+    masses: Sequence[PointMass], q: ca.SX, qd: ca.SX
+) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX, ca.SX]:
+    """The floating-base system of ``masses`` (positions relative to the stance foot): the base's
+    two free coordinates ``base`` (m) and velocities ``base_d`` (m/s) prepended to ``q`` and
+    ``qd``, and its mass matrix ``M(q_e)`` (the Hessian of the kinetic energy in ``q̇_e``).
+
+    Returns ``(base, base_d, q_e, q̇_e, M)``; ``base`` and ``base_d`` appear in neither ``M`` nor
+    the contact Jacobians (translation invariance), and the callers substitute zeros to be sure.
+    """
+    base = ca.SX.sym("base", 2)
+    base_d = ca.SX.sym("base_d", 2)
+    qe = ca.vertcat(base, q)
+    qde = ca.vertcat(base_d, qd)
+    floating = [(m, r + base) for m, r in masses]
+    return base, base_d, qe, qde, ca.hessian(kinetic_energy(floating, qe, qde), qde)[0]
+
+
 def impact_velocity(
     masses: Sequence[PointMass],
     q: ca.SX,
@@ -239,12 +257,7 @@ def impact_velocity(
         ``q̇⁺``, the generalised velocities just after impact (same coordinates as ``q``); with
         ``contact_impulse``, ``(q̇⁺, Λ)``.
     """
-    base = ca.SX.sym("base", 2)
-    base_d = ca.SX.sym("base_d", 2)
-    qe = ca.vertcat(base, q)
-    qde = ca.vertcat(base_d, qd)
-    floating = [(m, r + base) for m, r in masses]
-    M = ca.hessian(kinetic_energy(floating, qe, qde), qde)[0]
+    base, base_d, qe, qde, M = _floating(masses, q, qd)
     J = ca.jacobian(contact + base, qe)
     if contact_slip is not None:
         J = J + ca.jacobian(contact_slip, qde)
@@ -274,12 +287,7 @@ def impulse_work(
     before): the kinetic energy gained, ``P·v_p⁻ + ½ Pᵀ J_p M⁻¹ J_pᵀ P`` with ``v_p⁻ = J_p q̇``
     (Kuo 2002's push-off work; for a point foot pinned before, ``v_p⁻ ⟂`` a push along the leg
     and only the quadratic term remains)."""
-    base = ca.SX.sym("base", 2)
-    base_d = ca.SX.sym("base_d", 2)
-    qe = ca.vertcat(base, q)
-    qde = ca.vertcat(base_d, qd)
-    floating = [(m, r + base) for m, r in masses]
-    M = ca.hessian(kinetic_energy(floating, qe, qde), qde)[0]
+    base, base_d, qe, qde, M = _floating(masses, q, qd)
     Jp = ca.jacobian(point + base, qe)
     v = Jp @ ca.vertcat(0, 0, qd)
     gain = ca.dot(impulse, v) + 0.5 * ca.dot(impulse, Jp @ ca.solve(M, Jp.T @ impulse))
