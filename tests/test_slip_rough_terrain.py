@@ -26,23 +26,24 @@ def study(tmp_path_factory):
 
 
 def test_npz_columns_are_the_csv_rows(study):
-    """The columnar file holds the CSV's runs, in order (exact; the CSV's floats are repr)."""
+    """The columnar file holds the CSV's runs, in order (exact: the CSV's floats are repr, an
+    empty cell NaN), each with its controller's target apex."""
     summary, rows, col = study
-    assert len(rows) == col["seed"].size == col["apex_height_m"].shape[0]
-    assert col["apex_height_m"].shape[1] == summary["steps"] + 1
+    assert len(rows) == col["seed"].size
     for i, row in enumerate(rows):
         assert row["controller"] == col["controller"][i]
         assert float(row["amplitude_m"]) == col["amplitude_m"][i]
         assert int(row["seed"]) == col["seed"][i]
         assert int(row["steps_survived"]) == col["steps_survived"][i]
         assert row["ended_by"] == col["ended_by"][i]
-        k = col["steps_survived"][i]
-        heights = col["apex_height_m"][i]
-        assert np.all(np.isfinite(heights[: k + 1])) and np.all(np.isnan(heights[k + 1 :]))
-        if k > 1:  # the RMS apex error over the returns after the first, from the heights
-            e = np.abs(heights[1 : k + 1] - col["target_apex_m"][i])
-            assert float(row["rms_apex_error_m"]) == pytest.approx(np.sqrt(np.mean(e**2)),
-                                                                   rel=1e-12)  # fmt: skip
+        for key in ("rms_apex_error_m", "max_apex_error_m"):
+            value = float(row[key]) if row[key] else np.nan
+            np.testing.assert_array_equal(value, col[key][i])
+        if col["steps_survived"][i] > 1:
+            assert col["rms_apex_error_m"][i] <= col["max_apex_error_m"][i]
+    passive = col["controller"] == "open loop, passive gait"
+    assert np.all(col["target_apex_m"][~passive] == summary["target_apex_m"])
+    assert np.all(col["target_apex_m"][passive] == summary["passive_gait"]["z"])
 
 
 def test_statistics_from_the_columns(study):

@@ -326,7 +326,13 @@ def _policy(controller, model) -> Callable[[int, np.ndarray], np.ndarray]:
     def each(k: int, x: np.ndarray) -> np.ndarray:
         out = np.empty((x.shape[0], n_u))
         for r in range(x.shape[0]):
-            out[r] = np.asarray(controller(k, x[r]), dtype=float).ravel()
+            u = np.asarray(controller(k, x[r]), dtype=float).ravel()
+            if u.size != n_u:
+                raise GaitoptInputError(
+                    f"`controller` must give {n_u} inputs ({', '.join(model.inputs)}), got "
+                    f"{u.tolist()!r} at step {k}"
+                )
+            out[r] = u
         return out
 
     return each
