@@ -169,10 +169,10 @@ def compare(name, entry, amplitudes, seeds, steps, slip) -> dict:
         "amplitudes_m": list(amplitudes),
         "steps_survived_total": total,
         "same_steps_survived": same,
-        "max_apex_difference_m": worst,
-        "batch_s": batch_s,
-        "loop_s": loop_s,
-        "speedup": loop_s / batch_s,
+        "max_apex_gap_m": worst,
+        "batch_seconds": batch_s,
+        "loop_seconds": loop_s,
+        "loop_over_batch_time": loop_s / batch_s,
     }
 
 
@@ -261,9 +261,10 @@ def main(argv: list[str] | None = None) -> int:
     for name in CONTROLLERS:
         count = FAST_COMPARE if args.fast else COMPARE[name]
         speed[name] = compare(name, entries[name], rough, range(count), steps, slip)
+        got = speed[name]
         print(
-            f"{name}: batch {speed[name]['batch_s']:.2f} s, loop {speed[name]['loop_s']:.2f} s "
-            f"({speed[name]['speedup']:.1f}×), same steps: {speed[name]['same_steps_survived']}"
+            f"{name}: batch {got['batch_seconds']:.2f} s, loop {got['loop_seconds']:.2f} s "
+            f"({got['loop_over_batch_time']:.1f}×), same steps: {got['same_steps_survived']}"
         )
 
     # -- convergence per step on level ground from a larger perturbation ------------------------

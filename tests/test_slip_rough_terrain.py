@@ -90,5 +90,5 @@ def test_batch_equals_the_per_seed_loop(study):
     summary, _, _ = study
     for name, got in summary["batch_vs_loop"].items():
         assert got["same_steps_survived"], name
-        assert got["max_apex_difference_m"] <= 1e-9, name
+        assert got["max_apex_gap_m"] <= 1e-9, name
         assert got["steps_survived_total"] > 0
