@@ -99,8 +99,7 @@ static int gaitopt_xup2(gaitopt_call* c, const double* x, const double* u, const
     excursion; function and work each).  resets (phases x E x 2), starts (phases x 2): the
     resets' and the constraint checks' (function, work), 0 where none.
   u, p (per start by u_stride, p_stride), opts (rtol, atol, max_phase_time), x0 (N x n of
-    phase 0), status (in: B_RUNNING or
-    B_INVALID per start; out: the end).
+    phase 0), status (in: B_RUNNING or B_INVALID per start; out: the end).
   Out per start: last (phase * E + event of the terminal event, -1), returns, t_end, phase_end,
     acc (accumulation time, NaN), sec_t (N x (steps+1)), sec_x (N x (steps+1) x n0), and with
     cap > 0: counts, ev_t (N x cap), ev_code (N x cap: phase * E + event), ev_before,
