@@ -108,3 +108,30 @@ def test_apex_errors_and_bad_input(slip_design):
         gc.closed_loop_batch(lqr, slip, [[1.03]], steps=2, terrain=lambda k: {"height": 0.1})
     with pytest.raises(gaitopt.GaitoptInputError, match="`controller` as a constant input"):
         gc.closed_loop_batch([0.1, 0.2], slip, [[1.03]], steps=2, target=[1.0])
+
+
+def test_a_policy_with_batch_is_called_once_per_step(slip_design):
+    """A policy with ``batch(step, states)`` is evaluated for all running starts at once (one
+    call per step), with the same runs as calling it start by start (exact: the same inputs,
+    the same simulation)."""
+    slip, deadbeat, lqr = slip_design
+
+    class Counted:
+        def __init__(self):
+            self.calls = 0
+
+        def __call__(self, k, x):
+            return lqr(k, x)
+
+        def batch(self, k, states):
+            self.calls += 1
+            return np.array([lqr(k, x) for x in states])
+
+    terrain = [gt.random_terrain(slip, s, 0.05) for s in range(3)]
+    policy = Counted()
+    together = gc.closed_loop_batch(policy, slip, np.full((3, 1), 1.03), steps=6,
+                                    terrain=terrain, target=[1.0])  # fmt: skip
+    assert policy.calls == 6
+    one_by_one = gc.closed_loop_batch(lambda k, x: lqr(k, x), slip, np.full((3, 1), 1.03),
+                                      steps=6, terrain=terrain, target=[1.0])  # fmt: skip
+    np.testing.assert_array_equal(together.section, one_by_one.section)
