@@ -24,7 +24,8 @@ with every branch at γ = 0.08 and at γ = 0.5 > α (where standing is impossibl
     python problems/rimless_wheel_basin.py --out results [--fast]
 
 Writes results/rimless_wheel_basin/: summary.json, section_basin.csv, plane_basin.csv,
-basin.png, staircase.png.
+basin.npz (the simulated and closed-form grids of both charts, columnar: rows of the plane's
+fates by θ̇, columns by θ), basin.png, staircase.png.
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ import numpy as np  # noqa: E402
 from matplotlib.colors import ListedColormap  # noqa: E402
 
 import gaitopt  # noqa: E402
-from gaitopt.files import write_csv, write_json  # noqa: E402
+from gaitopt.files import replaced_atomically, write_csv, write_json  # noqa: E402
 from gaitopt.plotting import save_figure  # noqa: E402
 from gaitopt.returnmap import return_map  # noqa: E402
 
@@ -223,6 +224,23 @@ def main(argv: list[str] | None = None) -> int:
         "timing_s": elapsed,
     }
     write_json(summary, folder / "summary.json")
+    # the grids, columnar (NumPy's own format; the fates as ROLLING 1, STANDING 0, UNDECIDED -1)
+    with replaced_atomically(folder / "basin.npz") as tmp, open(tmp, "xb") as fh:
+        np.savez_compressed(
+            fh,
+            section_theta_dot=sec_sim,
+            section_fate_simulated=fate_sec_sim.astype(int),
+            section_fate_closed_form=fate_sec_ref.astype(int),
+            closed_form_theta_dot=sec_cf,
+            closed_form_fate=fate_cf.astype(int),
+            plane_theta=th_sim,
+            plane_theta_dot=rt_sim,
+            plane_fate_simulated=plane_sim.astype(int),
+            plane_fate_closed_form=plane_ref.astype(int),
+            plane_closed_form_theta=th_cf,
+            plane_closed_form_theta_dot=rt_cf,
+            plane_closed_form_fate=plane_cf.astype(int),
+        )
     _basin_figure(model, sec_cf, fate_cf, th_cf, rt_cf, plane_cf, th_sim, rt_sim, plane_sim, folder)
     _staircase_figure(model, steep, folder / "staircase.png")
 

@@ -24,14 +24,24 @@ no controller knows it.  Each run starts from a perturbed apex, z0 = z* + 3 cm, 
 * ``blind`` — the Ernst/Geyer swing-leg law θ(t since apex), deadbeat for every ground height in
   ±(A + 1 cm) (:func:`gaitopt.terrain.blind_swing_law`).
 
-Measured: steps survived (all seeds), the apex error |z − z*| per step (RMS over the steps after
-the first), and, on level ground from z0 = z* + 5 cm, the convergence per step.
+Measured, as a Monte-Carlo over seeded grounds (:data:`SEEDS` per controller and amplitude: 1000
+for the open loops and LQR, 100 for deadbeat, 16 for the blind law — each decision of those is
+one and 17 Newton solves; level ground is one run): steps survived, the fraction that survive
+every step with its 95 % Wilson interval and the mean steps survived with its 95 % interval, the
+apex error |z − z*| per step (RMS over the steps after the first), and, on level ground from
+z0 = z* + 5 cm, the convergence per step.  All the seeds of a controller and amplitude run
+together (:func:`gaitopt.control.closed_loop_batch`: one batched simulation step for every
+runner still up, each on its own ground); on the first :data:`COMPARE` seeds the study runs
+them again one by one with :func:`gaitopt.control.closed_loop` and records both times and that
+the steps survived are the same (``batch_vs_loop`` in the summary).
 
-Writes ``OUT/slip_rough_terrain/``: ``survival.csv`` (controller, amplitude, seed, steps
-survived, RMS error, max error, why it ended), ``convergence.csv`` (controller, step, apex error),
-``summary.json``, ``apex_heights.png`` (one seed at A = 5 cm), ``survival.png``,
-``convergence.png`` (the passive gait from 3 cm above its fixed point: 5 cm is beyond its
-unstable neighbour at 0.917 m).  ``--fast``: 2 amplitudes, 2 seeds, 12 steps.
+Writes ``OUT/slip_rough_terrain/``: ``survival.csv`` and ``survival.npz`` (per run, columnar:
+controller, amplitude, seed, steps survived, RMS and max apex error, why it ended, the target
+apex height), ``survival_stats.csv`` (per controller and amplitude, with the
+intervals), ``convergence.csv`` (controller, step, apex error), ``summary.json``,
+``apex_heights.png`` (seed 0 at A = 5 cm), ``survival.png``, ``convergence.png`` (the passive
+gait from 3 cm above its fixed point: 5 cm is beyond its unstable neighbour at 0.917 m).
+``--fast``: 2 amplitudes, 4 seeds, 12 steps, 2 compared seeds.
 
 Usage::
 
@@ -51,7 +61,8 @@ import numpy as np
 import gaitopt
 from gaitopt import control as gc
 from gaitopt import terrain as gt
-from gaitopt.files import write_csv, write_json
+from gaitopt.basin import wilson_interval
+from gaitopt.files import replaced_atomically, write_csv, write_json
 
 STUDY = "slip_rough_terrain"
 TARGET = 1.0  # m, apex height to hold
@@ -60,6 +71,14 @@ START_OFFSET = 0.03  # m, perturbed first apex
 # ground) stay visible.
 _STYLES = ("o-", "s--", "^-.", "D:", "v-")
 CONTROLLERS = ("open loop", "open loop, passive gait", "lqr", "deadbeat", "blind")
+#: Seeds (random grounds) per controller and amplitude: as many as the study affords in a few
+#: minutes — a linear policy costs nothing beside the batch simulation, a deadbeat decision one
+#: Newton solve per run and step, the blind swing-leg law 17 of them.
+SEEDS = {"open loop": 1000, "open loop, passive gait": 1000, "lqr": 1000, "deadbeat": 100,
+         "blind": 16}  # fmt: skip
+#: Seeds per controller on which the batch is run against the per-seed loop (timed).
+COMPARE = {"open loop": 32, "open loop, passive gait": 32, "lqr": 32, "deadbeat": 8, "blind": 2}
+FAST_SEEDS, FAST_COMPARE = 4, 2
 
 
 def build(slip):
@@ -77,23 +96,90 @@ def build(slip):
     }, {"deadbeat": deadbeat, "lqr": lqr, "passive": passive}
 
 
-def run(name, entry, amplitude, seed, steps, slip):
+def policy_for(name, entry, amplitude):
+    """(model, policy, target) of a controller on ground within ±``amplitude`` (the blind law
+    covers ±(A + 1 cm))."""
     model, policy, target = entry
     if name == "blind":
         policy = gt.BlindPolicy(policy, heights=(-amplitude - 0.01, amplitude + 0.01))
         model = policy.model()
+    return model, policy, target
+
+
+def run_batch(name, entry, amplitude, seeds, steps, slip):
+    """Every seed's run on its own ground, stepped together (gaitopt.control.closed_loop_batch)."""
+    model, policy, target = policy_for(name, entry, amplitude)
+    terrain = [gt.random_terrain(slip, s, amplitude) for s in seeds] if amplitude > 0 else None
+    starts = np.full((len(seeds), 1), target + START_OFFSET)
+    return gc.closed_loop_batch(policy, model, starts, steps=steps, terrain=terrain,
+                                target=[target])  # fmt: skip
+
+
+def run_loop(name, entry, amplitude, seed, steps, slip):
+    """One seed's run (gaitopt.control.closed_loop): the per-seed loop the batch replaces."""
+    model, policy, target = policy_for(name, entry, amplitude)
     terrain = gt.random_terrain(slip, seed, amplitude) if amplitude > 0 else None
-    start = {"z": target + START_OFFSET}
-    result = gc.closed_loop(
-        policy, model, start, steps=steps, terrain=terrain, target=np.array([target])
-    )
-    return result, terrain
+    return gc.closed_loop(policy, model, {"z": target + START_OFFSET}, steps=steps,
+                          terrain=terrain, target=np.array([target]))  # fmt: skip
+
+
+def statistics(survived: np.ndarray, rms: np.ndarray, steps: int) -> dict:
+    """Survival statistics of one controller at one amplitude, with 95 % intervals: the fraction
+    of runs that survive every step (Wilson score interval) and the mean steps survived (normal
+    approximation, 1.96 standard errors; none for one run)."""
+    n = int(survived.size)
+    whole = int(np.sum(survived == steps))
+    low, high = wilson_interval(whole, n)
+    mean = float(np.mean(survived))
+    half = 1.96 * float(np.std(survived, ddof=1)) / math.sqrt(n) if n > 1 else math.nan
+    finite = rms[np.isfinite(rms)]
+    return {
+        "runs": n,
+        "survived_all": whole,
+        "fraction_survived_all": whole / n,
+        "fraction_ci95": [low, high],
+        "mean_steps": mean,
+        "mean_steps_ci95": [mean - half, mean + half],
+        "median_steps": float(np.median(survived)),
+        "median_rms_apex_error_m": float(np.median(finite)) if finite.size else math.nan,
+    }
+
+
+def compare(name, entry, amplitudes, seeds, steps, slip) -> dict:
+    """The batch against the per-seed loop on the same runs: the same steps survived, apex heights
+    within 1e-9 m, and the time of each (s)."""
+    batch_s = loop_s = 0.0
+    same, worst, total = True, 0.0, 0
+    for amplitude in amplitudes:
+        clock = time.perf_counter()
+        batch = run_batch(name, entry, amplitude, seeds, steps, slip)
+        batch_s += time.perf_counter() - clock
+        clock = time.perf_counter()
+        loop = [run_loop(name, entry, amplitude, seed, steps, slip) for seed in seeds]
+        loop_s += time.perf_counter() - clock
+        for i, run in enumerate(loop):
+            same &= bool(batch.survived[i] == run.survived)
+            k = min(int(batch.survived[i]), run.survived)
+            worst = max(
+                worst, float(np.max(np.abs(batch.section[i, : k + 1] - run.section[: k + 1])))
+            )
+            total += run.survived
+    return {
+        "seeds": len(seeds),
+        "amplitudes_m": list(amplitudes),
+        "steps_survived_total": total,
+        "same_steps_survived": same,
+        "max_apex_gap_m": worst,
+        "batch_seconds": batch_s,
+        "loop_seconds": loop_s,
+        "loop_over_batch_time": loop_s / batch_s,
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="results", help="results directory (default: results)")
-    parser.add_argument("--fast", action="store_true", help="2 amplitudes, 2 seeds, 12 steps")
+    parser.add_argument("--fast", action="store_true", help="2 amplitudes, 4 seeds, 12 steps")
     parser.add_argument("--steps", type=int, default=None, help="steps per run (default 40)")
     args = parser.parse_args(argv)
     import matplotlib.pyplot as plt
@@ -105,44 +191,81 @@ def main(argv: list[str] | None = None) -> int:
     started = time.perf_counter()
     slip = gaitopt.model("slip")
     amplitudes = (0.02, 0.05) if args.fast else (0.0, 0.02, 0.05, 0.1, 0.15)
-    seeds = range(2) if args.fast else range(4)
+    seeds = {name: range(FAST_SEEDS if args.fast else SEEDS[name]) for name in CONTROLLERS}
     steps = args.steps or (12 if args.fast else 40)
     entries, design = build(slip)
     deadbeat = design["deadbeat"]
 
-    # -- survival on random terrain ---------------------------------------------------------------
-    rows, runs = [], {}
+    # -- survival on random terrain: every seed of a controller and amplitude in one batch -------
+    rows, runs, stats, timing = [], {}, {}, {}
     for amplitude in amplitudes:
         for name in CONTROLLERS:
-            for seed in seeds:
-                result, _ = run(name, entries[name], amplitude, seed, steps, slip)
-                errors = result.errors[1:]
-                rms = float(np.sqrt(np.mean(errors**2))) if errors.size else math.nan
-                peak = float(np.max(errors)) if errors.size else math.nan
-                why = "" if result.simulation.success else result.simulation.message
-                rows.append([name, amplitude, seed, result.survived, rms, peak, why])
-                runs[(name, amplitude, seed)] = result
-        done = [r for r in rows if r[1] == amplitude]
+            # level ground is the same for every seed: one run
+            chosen = seeds[name] if amplitude > 0 else range(1)
+            clock = time.perf_counter()
+            batch = run_batch(name, entries[name], amplitude, chosen, steps, slip)
+            timing.setdefault(name, 0.0)
+            timing[name] += time.perf_counter() - clock
+            rms, peak = batch.apex_errors()
+            for i, seed in enumerate(chosen):
+                why = "" if batch.success[i] else batch.message(i)
+                rows.append([name, amplitude, seed, int(batch.survived[i]), float(rms[i]),
+                             float(peak[i]), why])  # fmt: skip
+            runs[(name, amplitude)] = batch
+            stats.setdefault(name, {})[f"{amplitude:g}"] = statistics(batch.survived, rms, steps)
         print(
             f"A = {amplitude:g} m: "
             + ", ".join(
-                f"{n}: {sum(r[3] for r in done if r[0] == n)}/{steps * len(seeds)}"
+                f"{n}: {stats[n][f'{amplitude:g}']['survived_all']}/"
+                f"{stats[n][f'{amplitude:g}']['runs']} survive"
                 for n in CONTROLLERS
             )
         )
-    write_csv(
-        [
-            "controller",
-            "amplitude_m",
-            "seed",
-            "steps_survived",
-            "rms_apex_error_m",
-            "max_apex_error_m",
-            "ended_by",
-        ],
-        rows,
-        out / "survival.csv",
-    )
+    header = ["controller", "amplitude_m", "seed", "steps_survived", "rms_apex_error_m",
+              "max_apex_error_m", "ended_by"]  # fmt: skip
+    write_csv(header, rows, out / "survival.csv")
+    columns = list(zip(*rows, strict=True))
+    with replaced_atomically(out / "survival.npz") as tmp, open(tmp, "xb") as fh:
+        np.savez_compressed(
+            fh,
+            controller=np.array(columns[0], dtype=str),
+            amplitude_m=np.array(columns[1], dtype=float),
+            seed=np.array(columns[2], dtype=int),
+            steps_survived=np.array(columns[3], dtype=int),
+            rms_apex_error_m=np.array(columns[4], dtype=float),
+            max_apex_error_m=np.array(columns[5], dtype=float),
+            ended_by=np.array(columns[6], dtype=str),
+            target_apex_m=np.concatenate(
+                [
+                    np.full(len(runs[(n, a)]), runs[(n, a)].target[0])
+                    for a in amplitudes
+                    for n in CONTROLLERS
+                ]
+            ),  # fmt: skip
+        )
+    stat_rows = [
+        [name, float(a), *(lambda d: [d["runs"], d["survived_all"], d["fraction_survived_all"],
+                                       *d["fraction_ci95"], d["mean_steps"],
+                                       *d["mean_steps_ci95"], d["median_steps"],
+                                       d["median_rms_apex_error_m"]])(stats[name][a])]
+        for name in CONTROLLERS for a in stats[name]
+    ]  # fmt: skip
+    write_csv(["controller", "amplitude_m", "runs", "survived_all", "fraction_survived_all",
+               "fraction_ci95_low", "fraction_ci95_high", "mean_steps", "mean_steps_ci95_low",
+               "mean_steps_ci95_high", "median_steps", "median_rms_apex_error_m"], stat_rows,
+              out / "survival_stats.csv")  # fmt: skip
+
+    # -- the batch against the per-seed loop, on the same runs ------------------------------------
+    rough = [a for a in amplitudes if a > 0]
+    speed = {}
+    for name in CONTROLLERS:
+        count = FAST_COMPARE if args.fast else COMPARE[name]
+        speed[name] = compare(name, entries[name], rough, range(count), steps, slip)
+        got = speed[name]
+        print(
+            f"{name}: batch {got['batch_seconds']:.2f} s, loop {got['loop_seconds']:.2f} s "
+            f"({got['loop_over_batch_time']:.1f}×), same steps: {got['same_steps_survived']}"
+        )
 
     # -- convergence per step on level ground from a larger perturbation ------------------------
     conv_rows, convergence = [], {}
@@ -171,16 +294,17 @@ def main(argv: list[str] | None = None) -> int:
         gridspec_kw={"height_ratios": [3, 1]},
     )
     for k, name in enumerate(CONTROLLERS):
-        result = runs[(name, show_amp, 0)]
+        result = runs[(name, show_amp)]  # seed 0: row 0
+        survived = int(result.survived[0])
         ax.plot(
-            result.section[:, 0],
+            result.section[0, : survived + 1, 0],
             _STYLES[k % len(_STYLES)],
             ms=6 - k,
             mfc="none",
             lw=1.0,
             zorder=5 - k,
             color=f"C{k}",
-            label=f"{name} ({result.survived} steps)",
+            label=f"{name} ({survived} steps)",
         )
     ax.axhline(TARGET, color="k", lw=0.8, ls=":")
     ax.set_ylabel("apex height z (m)")
@@ -199,16 +323,37 @@ def main(argv: list[str] | None = None) -> int:
     axg.grid(alpha=0.3)
     save_figure(fig, out / "apex_heights.png")
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.0), layout="constrained")
+    fig, (ax, axf) = plt.subplots(2, 1, figsize=(6.8, 6.4), sharex=True, layout="constrained")
     width = 0.8 / len(CONTROLLERS)
     for k, name in enumerate(CONTROLLERS):
-        mean = [np.mean([r[3] for r in rows if r[0] == name and r[1] == a]) for a in amplitudes]
-        ax.bar(np.arange(len(amplitudes)) + (k - 2) * width, mean, width, color=f"C{k}", label=name)
-    ax.set_xticks(range(len(amplitudes)), [f"±{100 * a:g} cm" for a in amplitudes])
-    ax.set_ylabel(f"steps survived (mean of {len(seeds)} seeds, max {steps})")
-    ax.set_xlabel("ground height change per step, amplitude (m, shown in cm)")
-    ax.legend(fontsize=7)
+        got = [stats[name][f"{a:g}"] for a in amplitudes]
+        x = np.arange(len(amplitudes)) + (k - 2) * width
+        mean = np.array([g["mean_steps"] for g in got])
+        ci = np.array([g["mean_steps_ci95"] for g in got]).T
+        frac = np.array([g["fraction_survived_all"] for g in got])
+        wil = np.array([g["fraction_ci95"] for g in got]).T
+        label = f"{name} ({len(seeds[name])} seeds)"
+        ax.bar(
+            x,
+            mean,
+            width,
+            color=f"C{k}",
+            label=label,
+            yerr=np.nan_to_num(np.abs(ci - mean)),
+            capsize=2,
+            error_kw={"lw": 0.8},
+        )
+        axf.bar(x, frac, width, color=f"C{k}", yerr=np.abs(wil - frac), capsize=2,
+                error_kw={"lw": 0.8})  # fmt: skip
+    axf.set_xticks(range(len(amplitudes)), [f"±{100 * a:g} cm" for a in amplitudes])
+    ax.set_ylabel(f"steps survived n (mean, max {steps})")
+    axf.set_ylabel(f"fraction surviving all {steps} steps (1)")
+    axf.set_xlabel("ground height change per step, amplitude A (m, shown in cm)")
+    ax.set_title("95 % intervals: mean ± 1.96 s.e.; fraction: Wilson (level ground: one run)",
+                 fontsize=8)  # fmt: skip
+    fig.legend(fontsize=7, loc="outside lower center", ncol=3)
     ax.grid(alpha=0.3, axis="y")
+    axf.grid(alpha=0.3, axis="y")
     save_figure(fig, out / "survival.png")
 
     fig, ax = plt.subplots(figsize=(6.0, 4.0), layout="constrained")
@@ -240,10 +385,10 @@ def main(argv: list[str] | None = None) -> int:
     for name in CONTROLLERS:
         for amplitude in amplitudes:
             sel = [r for r in rows if r[0] == name and r[1] == amplitude]
-            survived_all = [r for r in sel if r[3] == steps]
+            got = stats[name][f"{amplitude:g}"]
             table.setdefault(name, {})[f"{amplitude:g}"] = {
-                "steps_survived": [r[3] for r in sel],
-                "all_seeds_survived": len(survived_all) == len(sel),
+                **got,
+                "all_seeds_survived": got["survived_all"] == got["runs"],
                 "rms_apex_error_m": float(np.nanmax([r[4] for r in sel])) if sel else None,
             }
     summary = {
@@ -260,10 +405,13 @@ def main(argv: list[str] | None = None) -> int:
             "multiplier": design["passive"].multipliers[0],
         },
         "amplitudes_m": list(amplitudes),
-        "seeds": list(seeds),
+        "seeds": {name: len(seeds[name]) for name in CONTROLLERS},
+        "seeds_level_ground": 1,
         "steps": steps,
         "start_offset_m": START_OFFSET,
         "survival": table,
+        "batch_seconds": timing,
+        "batch_vs_loop": speed,
         "convergence_level_ground": {k: list(v) for k, v in convergence.items()},
         "fast": args.fast,
         "elapsed_s": time.perf_counter() - started,

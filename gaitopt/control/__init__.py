@@ -18,13 +18,15 @@ differences).  Around it:
 
 Each design returns a :class:`StepController` (result object: gain, closed-loop multipliers
 ``eig(A − B K)``, the fixed point) that is also a policy ``controller(step, x) -> u`` for
-:func:`gaitopt.simulate`, whose closed-loop runs check it (:func:`closed_loop`).
+:func:`gaitopt.simulate`, whose closed-loop runs check it (:func:`closed_loop`; many starts, each
+on its own rough ground, stepped together: :func:`closed_loop_batch`).
 :meth:`Deadbeat.codegen` turns the deadbeat policy into C (CasADi ``Function.generate``, compiled
 with the system's C compiler) for a robot's control loop.
 """
 
 from __future__ import annotations
 
+from .batch_loop import ClosedLoopBatch, closed_loop_batch
 from .closed_loop import ClosedLoopRun, closed_loop
 from .codegen import GeneratedPolicy
 from .deadbeat_solver import Deadbeat
@@ -45,6 +47,8 @@ __all__ = [
     "deadbeat",
     "design_controller",
     "closed_loop",
+    "closed_loop_batch",
+    "ClosedLoopBatch",
     "ControlDesignError",
     "NoGaitError",
     "check_section_point",

@@ -89,7 +89,8 @@ static int gaitopt_xup2(gaitopt_call* c, const double* x, const double* u, const
   Many starts, each simulated to its end as gaitopt.simulate does (module docstring).
   dims: N, phases, E (events per phase, the stride of the per-event arrays), steps, n_u,
     u_stride (0: one input for all starts, else n_u), nmax (the largest phase's states),
-    cap (events kept per start; 0: none).
+    cap (events kept per start; 0: none), p_stride (0: one parameter vector for all starts,
+    else n_p: start s reads p + s * p_stride).
   phase_dims (phases x 4): n, m (events), n_tr (transitions), n_c (constraints).
   trans (phases x E x 3): target, terminal, closes the cycle (per transition).
   flags (phases x E x 2): a constraint's at_start (index j < n_c), an event's at_end (index k < m).
@@ -97,8 +98,8 @@ static int gaitopt_xup2(gaitopt_call* c, const double* x, const double* u, const
   fns (phases x 10): gaitopt_arc's table of each phase (step, events, admissible, flow,
     excursion; function and work each).  resets (phases x E x 2), starts (phases x 2): the
     resets' and the constraint checks' (function, work), 0 where none.
-  u, p, opts (rtol, atol, max_phase_time), x0 (N x n of phase 0), status (in: B_RUNNING or
-    B_INVALID per start; out: the end).
+  u, p (per start by u_stride, p_stride), opts (rtol, atol, max_phase_time), x0 (N x n of
+    phase 0), status (in: B_RUNNING or B_INVALID per start; out: the end).
   Out per start: last (phase * E + event of the terminal event, -1), returns, t_end, phase_end,
     acc (accumulation time, NaN), sec_t (N x (steps+1)), sec_x (N x (steps+1) x n0), and with
     cap > 0: counts, ev_t (N x cap), ev_code (N x cap: phase * E + event), ev_before,
@@ -108,11 +109,12 @@ static int gaitopt_xup2(gaitopt_call* c, const double* x, const double* u, const
 CASADI_SYMBOL_EXPORT int gaitopt_batch(
     const int* dims, const int* phase_dims, const int* trans, const int* flags,
     const double* dirs, void** fns, void** resets, void** starts, const double* u,
-    const double* p, const double* opts, const double* x0, int* status, int* last,
+    const double* p_all, const double* opts, const double* x0, int* status, int* last,
     int* returns, double* t_end, int* phase_end, double* acc, double* sec_t, double* sec_x,
     int* counts, double* ev_t, int* ev_code, double* ev_before, double* ev_after) {
   int N = dims[0], P = dims[1], E = dims[2], steps = dims[3], n_u = dims[4];
-  int u_stride = dims[5], nmax = dims[6], cap = dims[7], n0 = phase_dims[0];
+  int u_stride = dims[5], nmax = dims[6], cap = dims[7], p_stride = dims[8];
+  int n0 = phase_dims[0];
   double rtol = opts[0], atol = opts[1], max_time = opts[2];
   int s, i, k, code = 0, opened = 0;
   gaitopt_call *ev_calls = 0, *exc_calls = 0, *start_calls = 0, *reset_calls = 0;
@@ -170,6 +172,7 @@ CASADI_SYMBOL_EXPORT int gaitopt_batch(
 
   for (s = 0; s < N; s++) {
     const double* us = u + (size_t)s * u_stride;
+    const double* p = p_all + (size_t)s * p_stride;
     double t = 0.0;
     int phase = 0, ret = 0, n_imp = 0, count = 0, st = status[s];
     double* srow_t = sec_t + (size_t)s * (steps + 1);

@@ -17,18 +17,21 @@ once.  There is no Python per start and step.
 It is the same method as :func:`gaitopt.simulate`, not a new one: its events agree with the
 per-start simulation to rounding (the tests check 1e-10), and like it, it is a different method
 from the shooting's fixed-step RK8 kernels (:mod:`gaitopt.shooting`), so it stays an independent
-check of them.  Constant per-step inputs only (no feedforward, no input policy, no terrain).
+check of them.  Each start has its own constant input and its own parameters (``inputs``,
+``params``: a row per start, or one for all); no feedforward, no input policy, no terrain
+within a call — a step-to-step policy on rough ground is a sequence of one-step calls
+(:func:`gaitopt.control.closed_loop_batch`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from ..errors import GaitoptInputError
+from ..errors import GaitoptInputError, ParameterError
 from .batch_phase import STATUS, BatchPhases
 
 __all__ = ["simulate_batch", "BatchSimulation", "STATUS", "compiled_batch"]
@@ -137,6 +140,7 @@ def simulate_batch(
     *,
     steps: int = 10,
     inputs: Sequence[float] | np.ndarray | None = None,
+    params: Mapping[str, Any] | np.ndarray | None = None,
     full_state: bool = False,
     rtol: float = 1e-11,
     atol: float = 1e-12,
@@ -161,6 +165,14 @@ def simulate_batch(
     inputs : array_like, optional
         The per-step input, constant: one vector for every start, or N rows (one per start).
         Default: the model's nominal (passive) input.
+    params : mapping or array_like, optional
+        Parameters per start: a mapping name → value (one for every start) or N values (one per
+        start), the other parameters the model's; or an N × n_p array (every parameter, in
+        :meth:`~gaitopt.HybridModel.parameter_specs` order, their units).  Each start is then
+        simulated as ``gaitopt.simulate(model.replace(**its parameters), ...)`` would (a rough
+        ground's height per start, a slope per start).  Every value is checked as the model's
+        constructor checks it (its range and the model's own conditions).  Default: the
+        model's parameters for every start.
     full_state : bool
         Whether ``starts`` are full phase-0 states rather than section coordinates.
     rtol, atol, max_phase_time, constraints
@@ -213,14 +225,16 @@ def simulate_batch(
             f"`inputs` must be {n_u} finite values ({', '.join(model.inputs) or 'none'}) or one "
             f"row of them per start, got shape {np.shape(inputs)}"
         )
+    p = start_parameters(model, params, rows.shape[0])
     library = _compiled(model, backend)
     if library is not None:
         from .batch_compiled import run_compiled
 
-        out = run_compiled(library[0], model, library[1], rows, u, full_state, steps, rtol, atol,
-                           max_phase_time, constraints, record_events)  # fmt: skip
+        out = run_compiled(library[0], model, library[1], rows, u, p, full_state, steps, rtol,
+                           atol, max_phase_time, constraints, record_events)  # fmt: skip
     else:
-        run = BatchPhases(model, np.ascontiguousarray(u, dtype=float), rtol, atol,
+        p_rows = np.ascontiguousarray(np.broadcast_to(p, (rows.shape[0], p.shape[-1])))
+        run = BatchPhases(model, np.ascontiguousarray(u, dtype=float), p_rows, rtol, atol,
                           max_phase_time, constraints, record_events)  # fmt: skip
         run.start(rows, full_state, steps)
         run.loop()
@@ -240,6 +254,79 @@ def simulate_batch(
 
 
 _BACKENDS = ("auto", "compiled", "numpy")
+
+
+def start_parameters(model: Any, params: Any, n: int) -> np.ndarray:
+    """The parameter vectors of ``n`` starts from :func:`simulate_batch`'s ``params``: one
+    vector (n_p,) where every start has the same, else n × n_p rows.
+
+    Raises
+    ------
+    ParameterError
+        An unknown name, a shape that is neither one value nor ``n``, a value that is not a
+        finite number, outside its range or failing the model's own conditions (one line).
+    """
+    specs = model.parameter_specs()
+    names = [spec.name for spec in specs]
+    base = model.p
+    if params is None:
+        return base
+    what = f"{len(names)} parameters ({', '.join(names)})"
+    try:
+        if isinstance(params, Mapping):
+            rows = np.array(np.broadcast_to(base, (n, base.size)))
+            for name, value in params.items():
+                if name not in names:
+                    raise ParameterError(
+                        f"`params`: {model.name} has no parameter {name!r}; its parameters: "
+                        f"{', '.join(names)}"
+                    )
+                column = np.asarray(value, dtype=float)
+                if column.shape not in ((), (n,)):
+                    raise ParameterError(
+                        f"`params`[{name!r}] must be one number or {n} (one per start), got "
+                        f"shape {column.shape}"
+                    )
+                rows[:, names.index(name)] = column
+        else:
+            rows = np.asarray(params, dtype=float)
+            if rows.shape == (base.size,):
+                rows = np.array(np.broadcast_to(rows, (n, base.size)))
+            elif rows.shape != (n, base.size):
+                raise ParameterError(
+                    f"`params` must be a mapping name → value(s), or {n} rows (one per start) of "
+                    f"{what}, got shape {rows.shape}"
+                )
+    except (TypeError, ValueError) as exc:
+        if isinstance(exc, ParameterError):
+            raise
+        raise ParameterError(
+            f"`params` must be numbers: a mapping name → value(s) or rows of {what} ({exc})"
+        ) from None
+    for j, spec in enumerate(specs):  # ParameterSpec.contains, every start at once
+        col = rows[:, j]
+        with np.errstate(invalid="ignore"):
+            above = col > spec.low if spec.low_open else col >= spec.low
+            below = col < spec.high if spec.high_open else col <= spec.high
+            ok = np.isfinite(col) & above & below
+            if spec.integer:
+                ok &= col == np.floor(col)
+        if not ok.all():
+            i = int(np.flatnonzero(~ok)[0])
+            unit = "" if spec.unit == "1" else f" {spec.unit}"
+            raise ParameterError(
+                f"`params`: {model.name}'s parameter `{spec.name}` = {col[i]:g} (start {i}) is "
+                f"out of range; valid: {spec.range_text()}{unit}, default {spec.default:g}"
+            )
+    unique, first = np.unique(rows, axis=0, return_index=True)
+    for row, i in zip(unique, first, strict=True):  # the model's own conditions (check())
+        try:
+            model.replace(**dict(zip(names, map(float, row), strict=True)))
+        except ParameterError as exc:
+            raise ParameterError(f"`params` (start {int(i)}): {exc}") from None
+    if unique.shape[0] == 1:
+        return unique[0].copy()
+    return np.ascontiguousarray(rows)
 
 
 def compiled_batch(model: Any) -> bool:

@@ -80,38 +80,45 @@ class _Layout:
 
 @lru_cache(maxsize=64)
 def _prepared(model_cls, library: ArcLibrary, constraints: bool):
-    """A model class's layout and its section lift and phase-0 flow mapped over starts (built
-    once: they are the fixed cost of a call)."""
+    """A model class's layout and its section lift and phase-0 flow mapped over starts, with
+    one parameter vector for all (shared) and with one per start (built once: they are the fixed
+    cost of a call)."""
     structure = model_cls.structure()
+    lift, flow = structure.section.lift, structure.phases[0].flow
     return (_Layout(structure, library, constraints),
-            Mapped(structure.section.lift, shared=(1,)),
-            Mapped(structure.phases[0].flow, shared=(2,)))  # fmt: skip
+            Mapped(lift, shared=(1,)), Mapped(flow, shared=(2,)),
+            Mapped(lift), Mapped(flow))  # fmt: skip
 
 
-def _starts(prepared, model, rows: np.ndarray, u: np.ndarray, full_state: bool):
-    """Phase-0 states of the rows and which are states of the model (finite, finite rate)."""
-    m, p = rows.shape[0], model.p
+def _starts(prepared, rows: np.ndarray, u: np.ndarray, p: np.ndarray, full_state: bool):
+    """Phase-0 states of the rows and which are states of the model (finite, finite rate);
+    ``p`` one parameter vector for all rows, or a row per start."""
+    m = rows.shape[0]
+    lift, flow = (prepared[1], prepared[2]) if p.ndim == 1 else (prepared[3], prepared[4])
     with np.errstate(all="ignore"), _LOCK:
-        x = rows.copy() if full_state else prepared[1](m, rows, p)[0]
-        rate = prepared[2](m, x, u, p)[0]
+        x = rows.copy() if full_state else lift(m, rows, p)[0]
+        rate = flow(m, x, u, p)[0]
     valid = np.all(np.isfinite(x), axis=1) & np.all(np.isfinite(rate), axis=1)
     return np.ascontiguousarray(np.where(valid[:, None], x, 0.0)), valid
 
 
-def run_compiled(run, model, library: ArcLibrary, rows, u, full_state, steps, rtol, atol,
+def run_compiled(run, model, library: ArcLibrary, rows, u, p, full_state, steps, rtol, atol,
                  max_phase_time, constraints, record_events) -> dict:  # fmt: skip
     """Simulate every row in ``gaitopt_batch`` (``run``, the batch library's function): the
-    columns of :class:`gaitopt.simulation.batch.BatchSimulation` (see there)."""
+    columns of :class:`gaitopt.simulation.batch.BatchSimulation` (see there).  ``u``: a row per
+    start; ``p``: one parameter vector for all starts, or a row per start (``dims[8]``, the
+    parameter stride, 0 or n_p)."""
     prepared = _prepared(type(model), library, bool(constraints))
     lay = prepared[0]
     N, n0 = rows.shape[0], model.phases[0].n
     u = np.ascontiguousarray(u, dtype=float)
-    x0, valid = _starts(prepared, model, rows, u, full_state)
+    p = np.ascontiguousarray(p, dtype=float)
+    x0, valid = _starts(prepared, rows, u, p, full_state)
+    shared_p = p.ndim == 1
+    n_p = p.shape[-1]
     shared_u = u.shape[0] > 0 and bool(np.all(u == u[:1]))
     u_in = np.ascontiguousarray(u[:1] if shared_u else u).ravel()
     u_in = u_in if u_in.size else np.zeros(1)
-    p = np.ascontiguousarray(model.p, dtype=float).ravel()
-    p = p if p.size else np.zeros(1)
     # SciPy's solvers raise rtol to 100 eps (compiled.py: integrate_arc does the same)
     opts = np.array([max(float(rtol), 100 * np.finfo(float).eps), atol, max_phase_time])
     status = np.where(valid, 0, _INVALID).astype(np.int32)
@@ -127,7 +134,8 @@ def run_compiled(run, model, library: ArcLibrary, rows, u, full_state, steps, rt
     while True:  # once, or again for the starts whose events overflowed their buffer
         k = todo.size
         n_u = len(model.inputs)
-        dims = [k, len(model.phases), lay.E, steps, n_u, 0 if shared_u else n_u, lay.nmax, cap]
+        u_stride, p_stride = 0 if shared_u else n_u, 0 if shared_p else n_p
+        dims = [k, len(model.phases), lay.E, steps, n_u, u_stride, lay.nmax, cap, p_stride]
         dims = np.array(dims, dtype=np.int32)
         st, la, re, te, pe, ac = (
             a[todo].copy() for a in (status, last, returns, t_end, phase_end, acc)
@@ -141,10 +149,12 @@ def run_compiled(run, model, library: ArcLibrary, rows, u, full_state, steps, rt
         ev_a = np.zeros(max(k * cap * lay.nmax, 1))
         ui = u_in if shared_u else np.ascontiguousarray(u[todo]).ravel()
         xi = np.ascontiguousarray(x0[todo])
+        pi = p if shared_p else np.ascontiguousarray(p[todo]).ravel()
+        pi = pi if pi.size else np.zeros(1)
         code = run(*map(address, (dims, lay.phase_dims, lay.trans, lay.flags, lay.dirs)),
                    ctypes.addressof(lay.fns), ctypes.addressof(lay.resets),
                    ctypes.addressof(lay.starts),
-                   *map(address, (ui, p, opts, xi, st, la, re, te, pe, ac, stt, sx, counts,
+                   *map(address, (ui, pi, opts, xi, st, la, re, te, pe, ac, stt, sx, counts,
                                   ev_t, ev_code, ev_b, ev_a)))  # fmt: skip
         if code:
             raise RuntimeError(f"the compiled batch simulation of {model.name} failed")

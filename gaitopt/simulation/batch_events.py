@@ -229,7 +229,7 @@ def scan_crossings(run, ph, i, c, t_old, t_new, y_old, y_new, F, signed, best):
     coefficients, rows ``c`` only).  ``best`` = ``(t, event, x)``
     arrays over the accepted starts, updated with each start's earliest admissible crossing."""
     best_t, best_k, best_x = best
-    u, p = run.u[i[c]], run.p
+    u, p = run.u[i[c]], run.p[i[c]]
     to, tn, yn, Fc = t_old[c], t_new[c], y_new[c], F  # F: the rows c already
     yo, hc = y_old[c], tn - to
     step = (tn - to) / _C
@@ -237,7 +237,8 @@ def scan_crossings(run, ph, i, c, t_old, t_new, y_old, y_new, F, signed, best):
     grid[:, -1] = tn
 
     def probe(ev, rows, times):
-        return ph.probes[ev](rows.size, Fc[rows], yo[rows], to[rows], hc[rows], times, u[rows], p)
+        return ph.probes[ev](rows.size, Fc[rows], yo[rows], to[rows], hc[rows], times, u[rows],
+                             p[rows])  # fmt: skip
 
     for ev in range(len(ph.events)):
         previous = run.values[i[c], ev].copy()
@@ -258,9 +259,8 @@ def scan_crossings(run, ph, i, c, t_old, t_new, y_old, y_new, F, signed, best):
                 if j < _C:
                     end = at_b
                 else:  # the step's end state itself
-                    end = (
-                        ph.directions[ev] * ph.guards[ev](cand.size, yn[cand], u[cand], p)[0][:, 0]
-                    )
+                    guard = ph.guards[ev](cand.size, yn[cand], u[cand], p[cand])[0][:, 0]
+                    end = ph.directions[ev] * guard
                 previous[cand], current[cand] = start, end
                 ok = (start < 0) & (end >= 0)
                 hit = cand[ok]
@@ -293,7 +293,8 @@ def _locate(ph, ev, rows, a, b, g_b, probe, data):
         return t
     Fc, yo, to, hc, u, p = data
     r = rows[rest]
-    root, converged = ph.brents[ev](r.size, Fc[r], yo[r], to[r], hc[r], a[rest], b[rest], u[r], p)
+    root, converged = ph.brents[ev](r.size, Fc[r], yo[r], to[r], hc[r], a[rest], b[rest], u[r],
+                                    p[r])  # fmt: skip
     root, converged = root[:, 0], converged[:, 0] > 0
     slow = np.flatnonzero(~converged)
     if slow.size:  # the same iteration from the start, in NumPy, for the rows still going

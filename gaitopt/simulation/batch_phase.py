@@ -39,7 +39,8 @@ def _rms(v: np.ndarray) -> np.ndarray:
 
 
 class _Phase:
-    """A phase's functions, each mapped over starts (input and parameters fixed per batch)."""
+    """A phase's functions, each mapped over starts (an input and a parameter vector per
+    start)."""
 
     def __init__(self, model, index: int, constraints: bool):
         phase = model.phases[index]
@@ -57,11 +58,11 @@ class _Phase:
             from ..dop853 import step_function
 
             kernel = step_function(phase.flow, self.events, _C)
-        self.step = Mapped(kernel, shared=(3, 5, 6))
+        self.step = Mapped(kernel, shared=(3, 6))  # the check fractions and tolerances
         fs = compiled_functions(type(model))[index]
 
         def mapped(functions):
-            return [Mapped(f, shared=(2,)) if f is not None else None for f in functions]
+            return [Mapped(f) if f is not None else None for f in functions]
 
         self.flow = mapped(fs["flow"])[0]
         self.guards = mapped(fs["events"][: len(self.events)])
@@ -70,15 +71,15 @@ class _Phase:
         self.rates = mapped(fs["rates"])
         self.curvatures = mapped(fs["curvatures"])
         self.constraint_rates = mapped(fs["constraint_rates"][: len(self.constraints)])
-        self.probes = [Mapped(f, shared=(6,)) for f in fs["probes"][: len(self.events)]]
-        self.brents = [Mapped(f, shared=(7,)) for f in fs["brents"][: len(self.events)]]
+        self.probes = [Mapped(f) for f in fs["probes"][: len(self.events)]]
+        self.brents = [Mapped(f) for f in fs["brents"][: len(self.events)]]
 
 
 class BatchPhases:
     """Arrays of a batch simulation and the loop that advances them (see the module)."""
 
-    def __init__(self, model, u, rtol, atol, max_phase_time, constraints, record_events):
-        self.model, self.u, self.p = model, u, model.p
+    def __init__(self, model, u, p, rtol, atol, max_phase_time, constraints, record_events):
+        self.model, self.u, self.p = model, u, p  # a row per start each
         self.rtol, self.atol, self.max_time = rtol, atol, max_phase_time
         self.tol = np.array([rtol, atol])
         self.fractions = np.arange(1, _C) / _C
@@ -98,7 +99,7 @@ class BatchPhases:
             if full_state:
                 x = rows.copy()
             else:
-                lift = Mapped(model.section.lift, shared=(1,))
+                lift = Mapped(model.section.lift)
                 x = lift(m, rows, self.p)[0]
             rate = self.phases[0].flow(m, x, self.u, self.p)[0]
         valid = np.all(np.isfinite(x), axis=1) & np.all(np.isfinite(rate), axis=1)
@@ -198,14 +199,14 @@ class BatchPhases:
 
     def _begin(self, ph: _Phase, k: int, idx: np.ndarray) -> None:
         """A phase begins (``simulate``'s checks, then ``integrate_phase``'s set-up)."""
-        m, n, u, p = idx.size, ph.n, self.u[idx], self.p
+        m, n, u, p = idx.size, ph.n, self.u[idx], self.p[idx]
         x, t = self.y[idx, :n], self.t[idx]
         keep = np.ones(m, bool)
         e, n_tr = len(ph.events), ph.n_tr
         raw = [ph.guards[j](m, x, u, p)[0][:, 0] for j in range(e)]  # each event where it begins
         known: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
-        def rates(j: int, m=m, x=x, u=u) -> tuple[np.ndarray, np.ndarray]:
+        def rates(j: int, m=m, x=x, u=u, p=p) -> tuple[np.ndarray, np.ndarray]:
             """Signed ġ and g̈ of transition j at every start the phase began with."""
             if j not in known:
                 d = ph.directions[j]
@@ -241,7 +242,7 @@ class BatchPhases:
                 pending &= ~rest
                 keep &= ~rest
         rows = keep
-        idx, x, t, u, m = idx[keep], x[keep], t[keep], u[keep], int(keep.sum())
+        idx, x, t, u, p, m = idx[keep], x[keep], t[keep], u[keep], p[keep], int(keep.sum())
         if not m:
             return
         # SciPy's RungeKutta.__init__: the rate and select_initial_step (Hairer et al., II.4)
@@ -300,8 +301,8 @@ class BatchPhases:
         t_new = np.where(t_new - self.t_bound[idx] > 0, self.t_bound[idx], t_new)
         h = t_new - t
         h_abs = np.abs(h)
-        y_new, f_new, error, F, G = ph.step(m, y, f, h, self.fractions, self.u[idx], self.p,
-                                            self.tol)  # fmt: skip
+        y_new, f_new, error, F, G = ph.step(m, y, f, h, self.fractions, self.u[idx],
+                                            self.p[idx], self.tol)  # fmt: skip
         error = error[:, 0]
         accept = (error < 1) & ~small
         with np.errstate(all="ignore"):
@@ -364,7 +365,7 @@ class BatchPhases:
                 self._event(i, tt, k, tr.name, xm, None)
                 self._end(i, FELL, tr.name)
                 continue
-            x = ph.resets[ev](i.size, xm, self.u[i], self.p)[0]
+            x = ph.resets[ev](i.size, xm, self.u[i], self.p[i])[0]
             self._event(i, tt, k, tr.name, xm, x)
             target = tr.target
             self.phase[i] = target
