@@ -1,0 +1,224 @@
+"""A model's DOP853 step on :data:`LANES` starts at once: C on explicit vector types, emitted from
+the CasADi SX function's instruction list (:func:`emit`), compiled per model class
+(:func:`vector_steps`) for the lane driver (:mod:`gaitopt.kernels.lane_driver`).
+
+Each SX instruction becomes one operation on a GCC vector of :data:`LANES` doubles
+(``typedef double gaitopt_v __attribute__((vector_size(64)))``): ``+ − × ÷``, negation, square
+and twice as vector arithmetic, every other operation (``sin``, ``cos``, ``sqrt``, ``fabs``,
+``fmax``, ``pow``, comparisons…) per lane with the C library's scalar function, as CasADi's
+generated C calls it (:data:`_LANEWISE`).  A ``sin`` and a ``cos`` of the same value are
+computed in one loop over the lanes, where GCC makes them one ``sincos`` as it does in the
+scalar step.  The operations and their order are the scalar step's (the instruction list is what
+CasADi's code generator prints), compiled with the same ``-ffp-contract=off`` (no fused
+multiply-adds): the vector step gives each lane the scalar step's numbers to the bit (tested,
+``tests/test_vector_step.py``).  Nothing relies on auto-vectorisation; the step function is
+compiled for AVX-512, AVX2 and baseline x86-64 at once (``target_clones``: the loader picks the
+host's), elsewhere for the compiler's default target, where GCC lowers each vector operation to
+the widest the target has.
+
+Layout: lane ``l`` of input (or output) ``j``'s nonzero ``k`` is ``arg[j][k * LANES + l]``
+(structure of arrays, 64-byte aligned by the caller).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import subprocess
+import sys
+from functools import lru_cache
+
+import casadi as ca
+
+from .cache import _compile, _key, cache_dir, compiler
+from .verify import CHECKS_PER_STEP, STEP_FLAGS, phase_events
+
+__all__ = ["LANES", "MAX_INSTRUCTIONS", "VectorSteps", "emit", "vector_steps"]
+
+#: Starts per vector step call (one AVX-512 register of doubles; two AVX2, four SSE2 ones).
+LANES = 8
+#: Steps with more SX instructions than this keep the scalar driver (GCC's time on one function
+#: compiled three times grows faster than linearly; the five-link biped's step, ~40 000, still
+#: compiles in seconds).
+MAX_INSTRUCTIONS = 60_000
+
+_OPS = {getattr(ca, name): name[3:] for name in dir(ca) if name.startswith("OP_")}
+#: Vector arithmetic (CasADi's printing: ``casadi_sq(x)`` is ``x*x``, twice ``2.*x``).
+_VECTOR = {"ADD": "({0}+{1})", "SUB": "({0}-{1})", "MUL": "({0}*{1})", "DIV": "({0}/{1})",
+           "NEG": "(-{0})", "SQ": "({0}*{0})", "TWICE": "(2.*{0})", "INV": "(1./{0})",
+           "ASSIGN": "{0}"}  # fmt: skip
+#: Per lane, as CasADi's generated C writes each operation on doubles.
+_LANEWISE = {
+    "SIN": "sin({0})", "COS": "cos({0})", "TAN": "tan({0})", "ASIN": "asin({0})",
+    "ACOS": "acos({0})", "ATAN": "atan({0})", "SINH": "sinh({0})", "COSH": "cosh({0})",
+    "TANH": "tanh({0})", "ASINH": "asinh({0})", "ACOSH": "acosh({0})", "ATANH": "atanh({0})",
+    "EXP": "exp({0})", "LOG": "log({0})", "SQRT": "sqrt({0})", "FABS": "fabs({0})",
+    "FLOOR": "floor({0})", "CEIL": "ceil({0})", "ERF": "erf({0})", "EXPM1": "expm1({0})",
+    "LOG1P": "log1p({0})", "SIGN": "({0}<0 ? -1. : ({0}>0 ? 1. : {0}))",
+    "POW": "pow({0},{1})", "CONSTPOW": "pow({0},{1})", "ATAN2": "atan2({0},{1})",
+    "FMIN": "fmin({0},{1})", "FMAX": "fmax({0},{1})", "FMOD": "fmod({0},{1})",
+    "COPYSIGN": "copysign({0},{1})", "HYPOT": "hypot({0},{1})",
+    "LT": "({0}<{1})", "LE": "({0}<={1})", "EQ": "({0}=={1})", "NE": "({0}!={1})",
+    "NOT": "(!{0})", "AND": "({0}&&{1})", "OR": "({0}||{1})", "IF_ELSE_ZERO": "({0}?{1}:0)",
+}  # fmt: skip
+_BINARY = {"ADD", "SUB", "MUL", "DIV", "POW", "CONSTPOW", "ATAN2", "FMIN", "FMAX", "FMOD",
+           "COPYSIGN", "HYPOT", "LT", "LE", "EQ", "NE", "AND", "OR", "IF_ELSE_ZERO"}  # fmt: skip
+
+HEADER = f"""
+/* gaitopt vector steps (gaitopt/kernels/vector_step.py): {LANES} lanes per call */
+#include <math.h>
+#include <string.h>
+#define GAITOPT_LANES {LANES}
+typedef double gaitopt_v __attribute__((vector_size({8 * LANES})));
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(GAITOPT_CLONES)
+#define GAITOPT_TARGETS __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define GAITOPT_TARGETS
+#endif
+static inline gaitopt_v gaitopt_vload(const double* p) {{
+  gaitopt_v v; memcpy(&v, p, sizeof v); return v;
+}}
+static inline void gaitopt_vstore(double* p, gaitopt_v v) {{ memcpy(p, &v, sizeof v); }}
+"""
+
+
+def _c(value: float) -> str:
+    """A double constant exactly (C99 hexadecimal floating literal)."""
+    if value != value:
+        return "NAN"
+    if value in (float("inf"), float("-inf")):
+        return "INFINITY" if value > 0 else "(-INFINITY)"
+    return float(value).hex()
+
+
+def emit(fn: ca.Function, name: str) -> str:
+    """C of ``int name(const double** arg, double** res)``: ``fn`` (an SX function) on
+    :data:`LANES` lanes (module docstring's layout).  Raises NotImplementedError for an
+    operation it cannot write (a call of another function)."""
+    if not fn.is_a("SXFunction"):
+        raise NotImplementedError(f"{fn.name()} is not an SX function")
+    n = fn.n_instructions()
+    ids = [fn.instruction_id(k) for k in range(n)]
+    ins = [fn.instruction_input(k) for k in range(n)]
+    outs = [fn.instruction_output(k) for k in range(n)]
+    # SSA names: value v<k> is instruction k's result; slot[w] the value in work slot w
+    slot: dict[int, int] = {}
+    args: list[list[int]] = []
+    for k in range(n):
+        op = _OPS.get(ids[k], str(ids[k]))
+        if op in ("INPUT", "CONST"):
+            args.append([])
+        elif op == "OUTPUT":
+            args.append([slot[ins[k][0]]])
+        else:
+            if op not in _VECTOR and op not in _LANEWISE:
+                raise NotImplementedError(f"{fn.name()}: operation {op} has no vector form")
+            arity = 2 if op in _BINARY else 1
+            args.append([slot[w] for w in ins[k][:arity]])
+        if op != "OUTPUT":
+            slot[outs[k][0]] = k
+    # a sin and a cos of the same value: one loop over the lanes (GCC: one sincos per lane)
+    partner: dict[int, int] = {}
+    first: dict[tuple[str, int], int] = {}
+    for k in range(n):
+        op = _OPS.get(ids[k])
+        if op in ("SIN", "COS"):
+            other = first.get(("COS" if op == "SIN" else "SIN", args[k][0]))
+            if other is not None and other not in partner:
+                partner[other], partner[k] = k, other
+            else:
+                first.setdefault((op, args[k][0]), k)
+    lines = [f"GAITOPT_TARGETS int {name}(const double** arg, double** res) {{",
+             "  int l;", "  (void)l;"]  # fmt: skip
+    for k in range(n):
+        op = _OPS.get(ids[k], str(ids[k]))
+        a = [f"v{j}" for j in args[k]]
+        if op == "INPUT":
+            j, nz = ins[k][0], ins[k][1]
+            lines.append(f"  const gaitopt_v v{k} = gaitopt_vload(arg[{j}] + {nz * LANES});")
+        elif op == "CONST":
+            c = _c(fn.instruction_constant(k))
+            lines.append(f"  const gaitopt_v v{k} = {{{', '.join([c] * LANES)}}};")
+        elif op == "OUTPUT":
+            j, nz = outs[k][0], outs[k][1]
+            lines.append(f"  if (res[{j}]) gaitopt_vstore(res[{j}] + {nz * LANES}, {a[0]});")
+        elif op in _VECTOR:
+            lines.append(f"  const gaitopt_v v{k} = {_VECTOR[op].format(*a)};")
+        elif k in partner:
+            other = partner[k]
+            if other < k:
+                continue  # written with its partner
+            sin_k, cos_k = (k, other) if op == "SIN" else (other, k)
+            lines.append(f"  gaitopt_v v{sin_k}, v{cos_k};")
+            lines.append(f"  for (l = 0; l < {LANES}; l++) {{ v{sin_k}[l] = sin({a[0]}[l]); "
+                         f"v{cos_k}[l] = cos({a[0]}[l]); }}")  # fmt: skip
+        else:
+            expr = _LANEWISE[op].format(*(f"{x}[l]" for x in a))
+            lines.append(f"  gaitopt_v v{k};")
+            lines.append(f"  for (l = 0; l < {LANES}; l++) v{k}[l] = {expr};")
+    lines += ["  return 0;", "}"]
+    return "\n".join(lines) + "\n"
+
+
+def _step_functions(model_cls) -> list[tuple[str, ca.Function]]:
+    """The verification's DOP853 steps of a model class in SX (:mod:`gaitopt.kernels.verify`),
+    each phase with and without its unilateral constraints among the events."""
+    from ..dop853 import step_function
+
+    out = []
+    for i, phase in enumerate(model_cls.structure().phases):
+        for constraints in (True, False):
+            f = step_function(phase.flow, phase_events(phase, constraints), CHECKS_PER_STEP)
+            out.append((f"gaitopt_vstep_{i}_{'c' if constraints else 'g'}", f))
+    return out
+
+
+class VectorSteps:
+    """A loaded vector step library: :meth:`address` of phase ``i``'s step (with or without the
+    constraints among its events), kept alive with the library."""
+
+    def __init__(self, library: ctypes.CDLL, names: list[str]):
+        self._library = library
+        self.names = names
+
+    def function(self, phase: int, constraints: bool):
+        return getattr(self._library, f"gaitopt_vstep_{phase}_{'c' if constraints else 'g'}")
+
+    def address(self, phase: int, constraints: bool) -> int:
+        return ctypes.cast(self.function(phase, constraints), ctypes.c_void_p).value
+
+
+def _build(cc: str, source: str, flags: tuple[str, ...], verbose: bool) -> ctypes.CDLL:
+    library = cache_dir() / f"gaitopt_vstep_{_key(source, cc, flags)}.so"
+    if not library.exists():
+        _compile(source, cc, library, "vector step", verbose, flags)
+    return ctypes.CDLL(str(library))
+
+
+@lru_cache(maxsize=64)
+def vector_steps(model_cls, verbose: bool = True) -> VectorSteps | None:
+    """The vector steps of a model class compiled (cached like every kernel), or None: no
+    compiler, ``GAITOPT_LANES=0``, a step that is not an SX function or is larger than
+    :data:`MAX_INSTRUCTIONS`, or a failed compile (the batch then runs the scalar driver)."""
+    cc = compiler()
+    if cc is None or os.environ.get("GAITOPT_LANES", "1") == "0":
+        return None
+    try:
+        functions = _step_functions(model_cls)
+        if any(f.n_instructions() > MAX_INSTRUCTIONS for _, f in functions):
+            return None
+        body = "".join(emit(f, name) for name, f in functions)
+    except (RuntimeError, TypeError, NotImplementedError):
+        return None
+    names = [name for name, _ in functions]
+    errors = []
+    for clones in (True, False):  # target_clones needs GCC on x86-64 with ifunc support
+        source = ("#define GAITOPT_CLONES 1\n" if clones else "") + HEADER + body
+        try:
+            return VectorSteps(_build(cc, source, STEP_FLAGS, verbose), names)
+        except (OSError, subprocess.SubprocessError) as exc:
+            errors.append(exc)
+    if verbose:
+        print(f"gaitopt: could not compile the vector steps ({errors[-1]}); one start at a time",
+              file=sys.stderr)  # fmt: skip
+    return None
