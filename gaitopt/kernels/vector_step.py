@@ -24,16 +24,19 @@ from __future__ import annotations
 
 import ctypes
 import os
+import platform
 import subprocess
 import sys
 from functools import lru_cache
+from pathlib import Path
 
 import casadi as ca
 
+from ..errors import GaitoptInputError
 from .cache import _compile, _key, cache_dir, compiler
 from .verify import CHECKS_PER_STEP, STEP_FLAGS, phase_events
 
-__all__ = ["LANES", "MAX_INSTRUCTIONS", "VectorSteps", "emit", "vector_steps"]
+__all__ = ["LANES", "MATH", "MAX_INSTRUCTIONS", "VectorSteps", "emit", "host_flags", "vector_steps"]
 
 #: Starts per vector step call (one AVX-512 register of doubles; two AVX2, four SSE2 ones).
 LANES = 8
@@ -41,6 +44,9 @@ LANES = 8
 #: compiled three times grows faster than linearly; the five-link biped's step, ~40 000, still
 #: compiles in seconds).
 MAX_INSTRUCTIONS = 60_000
+
+#: The vector steps' ``sin`` and ``cos`` by default (:func:`vector_steps`).
+MATH = "exact"
 
 _OPS = {getattr(ca, name): name[3:] for name in dir(ca) if name.startswith("OP_")}
 #: Vector arithmetic (CasADi's printing: ``casadi_sq(x)`` is ``x*x``, twice ``2.*x``).
@@ -66,19 +72,56 @@ _BINARY = {"ADD", "SUB", "MUL", "DIV", "POW", "CONSTPOW", "ATAN2", "FMIN", "FMAX
 
 HEADER = f"""
 /* gaitopt vector steps (gaitopt/kernels/vector_step.py): {LANES} lanes per call */
+#define _GNU_SOURCE /* sincos */
 #include <math.h>
 #include <string.h>
 #define GAITOPT_LANES {LANES}
 typedef double gaitopt_v __attribute__((vector_size({8 * LANES})));
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(GAITOPT_CLONES)
-#define GAITOPT_TARGETS __attribute__((target_clones("avx512f", "avx2", "default")))
-#else
-#define GAITOPT_TARGETS
-#endif
 static inline gaitopt_v gaitopt_vload(const double* p) {{
   gaitopt_v v; memcpy(&v, p, sizeof v); return v;
 }}
 static inline void gaitopt_vstore(double* p, gaitopt_v v) {{ memcpy(p, &v, sizeof v); }}
+"""
+
+#: sin and cos of a whole vector from glibc's libmvec (its x86-64 vector ABI: 8 lanes in one
+#: AVX-512 call, 4 in an AVX2 one, 2 in an SSE one), for ``math="fast"``.
+MVEC = r"""
+#include <immintrin.h>
+#if defined(__AVX512F__)
+__m512d _ZGVeN8v_sin(__m512d);
+__m512d _ZGVeN8v_cos(__m512d);
+#define GAITOPT_MVEC_PART 8
+#define GAITOPT_MVEC_SIN(x) _ZGVeN8v_sin(x)
+#define GAITOPT_MVEC_COS(x) _ZGVeN8v_cos(x)
+typedef __m512d gaitopt_part;
+#elif defined(__AVX2__)
+__m256d _ZGVdN4v_sin(__m256d);
+__m256d _ZGVdN4v_cos(__m256d);
+#define GAITOPT_MVEC_PART 4
+#define GAITOPT_MVEC_SIN(x) _ZGVdN4v_sin(x)
+#define GAITOPT_MVEC_COS(x) _ZGVdN4v_cos(x)
+typedef __m256d gaitopt_part;
+#else
+__m128d _ZGVbN2v_sin(__m128d);
+__m128d _ZGVbN2v_cos(__m128d);
+#define GAITOPT_MVEC_PART 2
+#define GAITOPT_MVEC_SIN(x) _ZGVbN2v_sin(x)
+#define GAITOPT_MVEC_COS(x) _ZGVbN2v_cos(x)
+typedef __m128d gaitopt_part;
+#endif
+#define GAITOPT_MVEC(NAME, F)                                                   \
+  static inline gaitopt_v NAME(gaitopt_v x) {                                   \
+    gaitopt_v r; int i;                                                         \
+    for (i = 0; i < GAITOPT_LANES; i += GAITOPT_MVEC_PART) {                    \
+      gaitopt_part a;                                                           \
+      memcpy(&a, (double*)&x + i, sizeof a);                                    \
+      a = F(a);                                                                 \
+      memcpy((double*)&r + i, &a, sizeof a);                                    \
+    }                                                                           \
+    return r;                                                                   \
+  }
+GAITOPT_MVEC(gaitopt_vsin, GAITOPT_MVEC_SIN)
+GAITOPT_MVEC(gaitopt_vcos, GAITOPT_MVEC_COS)
 """
 
 
@@ -91,48 +134,67 @@ def _c(value: float) -> str:
     return float(value).hex()
 
 
-def emit(fn: ca.Function, name: str) -> str:
+def emit(fn: ca.Function, name: str, math: str = "exact") -> str:
     """C of ``int name(const double** arg, double** res)``: ``fn`` (an SX function) on
-    :data:`LANES` lanes (module docstring's layout).  Raises NotImplementedError for an
-    operation it cannot write (a call of another function)."""
+    :data:`LANES` lanes (module docstring's layout); with ``math="fast"`` its ``sin`` and ``cos``
+    are libmvec's (:data:`MVEC`), else the C library's per lane.  Raises NotImplementedError for
+    an operation it cannot write (a call of another function)."""
     if not fn.is_a("SXFunction"):
         raise NotImplementedError(f"{fn.name()} is not an SX function")
     n = fn.n_instructions()
     ids = [fn.instruction_id(k) for k in range(n)]
     ins = [fn.instruction_input(k) for k in range(n)]
     outs = [fn.instruction_output(k) for k in range(n)]
-    # SSA names: value v<k> is instruction k's result; slot[w] the value in work slot w
+    # SSA names: value v<k> is instruction k's result; slot[w] the value in work slot w.  An
+    # operation on the same values as an earlier one is that one (value numbering, as GCC's
+    # on the scalar step: it finds the sin and cos of one value that it makes one sincos)
     slot: dict[int, int] = {}
     args: list[list[int]] = []
+    seen: dict[tuple, int] = {}
+    same: dict[int, int] = {}  # instruction -> the earlier one it repeats
     for k in range(n):
         op = _OPS.get(ids[k], str(ids[k]))
-        if op in ("INPUT", "CONST"):
+        if op == "INPUT":
             args.append([])
+            key = ("INPUT", ins[k][0], ins[k][1])
+        elif op == "CONST":
+            args.append([])
+            key = ("CONST", float(fn.instruction_constant(k)).hex())
         elif op == "OUTPUT":
             args.append([slot[ins[k][0]]])
+            key = None
         else:
             if op not in _VECTOR and op not in _LANEWISE:
                 raise NotImplementedError(f"{fn.name()}: operation {op} has no vector form")
             arity = 2 if op in _BINARY else 1
             args.append([slot[w] for w in ins[k][:arity]])
+            operands = sorted(args[k]) if op in ("ADD", "MUL") else args[k]
+            key = (op, *operands)
+        if key is not None:
+            if key in seen:
+                same[k] = seen[key]
+            else:
+                seen[key] = k
         if op != "OUTPUT":
-            slot[outs[k][0]] = k
+            slot[outs[k][0]] = same.get(k, k)
     # a sin and a cos of the same value: one loop over the lanes (GCC: one sincos per lane)
     partner: dict[int, int] = {}
     first: dict[tuple[str, int], int] = {}
     for k in range(n):
         op = _OPS.get(ids[k])
-        if op in ("SIN", "COS"):
+        if op in ("SIN", "COS") and k not in same:
             other = first.get(("COS" if op == "SIN" else "SIN", args[k][0]))
             if other is not None and other not in partner:
                 partner[other], partner[k] = k, other
             else:
                 first.setdefault((op, args[k][0]), k)
-    lines = [f"GAITOPT_TARGETS int {name}(const double** arg, double** res) {{",
+    lines = [f"int {name}(const double** arg, double** res) {{",
              "  int l;", "  (void)l;"]  # fmt: skip
     for k in range(n):
         op = _OPS.get(ids[k], str(ids[k]))
         a = [f"v{j}" for j in args[k]]
+        if k in same:
+            continue  # the value of an earlier instruction
         if op == "INPUT":
             j, nz = ins[k][0], ins[k][1]
             lines.append(f"  const gaitopt_v v{k} = gaitopt_vload(arg[{j}] + {nz * LANES});")
@@ -144,14 +206,18 @@ def emit(fn: ca.Function, name: str) -> str:
             lines.append(f"  if (res[{j}]) gaitopt_vstore(res[{j}] + {nz * LANES}, {a[0]});")
         elif op in _VECTOR:
             lines.append(f"  const gaitopt_v v{k} = {_VECTOR[op].format(*a)};")
+        elif math == "fast" and op in ("SIN", "COS"):
+            lines.append(f"  const gaitopt_v v{k} = gaitopt_v{op.lower()}({a[0]});")
         elif k in partner:
             other = partner[k]
             if other < k:
                 continue  # written with its partner
             sin_k, cos_k = (k, other) if op == "SIN" else (other, k)
             lines.append(f"  gaitopt_v v{sin_k}, v{cos_k};")
-            lines.append(f"  for (l = 0; l < {LANES}; l++) {{ v{sin_k}[l] = sin({a[0]}[l]); "
-                         f"v{cos_k}[l] = cos({a[0]}[l]); }}")  # fmt: skip
+            lines.append(
+                f"  for (l = 0; l < {LANES}; l++) {{ double s_, c_; sincos({a[0]}[l], &s_, &c_);"
+                f" v{sin_k}[l] = s_; v{cos_k}[l] = c_; }}"
+            )
         else:
             expr = _LANEWISE[op].format(*(f"{x}[l]" for x in a))
             lines.append(f"  gaitopt_v v{k};")
@@ -177,9 +243,14 @@ class VectorSteps:
     """A loaded vector step library: :meth:`address` of phase ``i``'s step (with or without the
     constraints among its events), kept alive with the library."""
 
-    def __init__(self, library: ctypes.CDLL, names: list[str]):
+    def __init__(self, library: ctypes.CDLL, names: list[str], n_p: dict[str, int]):
         self._library = library
         self.names = names
+        self._n_p = n_p
+
+    def n_p(self, phase: int, constraints: bool) -> int:
+        """The parameters (entries of ``p``) phase ``phase``'s step reads."""
+        return self._n_p[f"gaitopt_vstep_{phase}_{'c' if constraints else 'g'}"]
 
     def function(self, phase: int, constraints: bool):
         return getattr(self._library, f"gaitopt_vstep_{phase}_{'c' if constraints else 'g'}")
@@ -195,29 +266,74 @@ def _build(cc: str, source: str, flags: tuple[str, ...], verbose: bool) -> ctype
     return ctypes.CDLL(str(library))
 
 
+def host_flags() -> tuple[str, ...]:
+    """The compiler flags of the widest vector unit the host has (``-mavx512f``, ``-mavx2``),
+    read from ``/proc/cpuinfo`` on an x86-64 Linux host, else none (the compiler's baseline, SSE2
+    on x86-64: the same numbers, four instructions per vector operation)."""
+    if platform.machine().lower() not in ("x86_64", "amd64"):
+        return ()
+    try:
+        text = Path("/proc/cpuinfo").read_text()
+    except OSError:
+        return ()
+    for line in text.splitlines():
+        if line.startswith("flags"):
+            flags = set(line.split(":", 1)[1].split())
+            if "avx512f" in flags:
+                return ("-mavx512f",)
+            return ("-mavx2",) if "avx2" in flags else ()
+    return ()
+
+
+def vector_steps(model_cls, math: str | None = None, verbose: bool = True) -> VectorSteps | None:
+    """The vector steps of a model class compiled for the host (cached like every kernel), or
+    None: no compiler, ``GAITOPT_LANES=0`` in the environment, a step that is not an SX
+    function or is larger than :data:`MAX_INSTRUCTIONS`, or a failed compile (the batch then
+    runs the scalar driver, one start at a time).  ``math``: ``"exact"`` (the C library's
+    ``sin``/``cos`` per lane: the scalar step's bits) or ``"fast"`` (libmvec's, on x86-64 with
+    glibc; else exact); default ``$GAITOPT_VECTOR_MATH``, else :data:`MATH`."""
+    if os.environ.get("GAITOPT_LANES", "1") == "0":
+        return None
+    math = math or os.environ.get("GAITOPT_VECTOR_MATH") or MATH
+    if math not in ("exact", "fast"):
+        raise GaitoptInputError(
+            f"`math` (GAITOPT_VECTOR_MATH) must be 'exact' or 'fast', got {math!r}"
+        )
+    return _vector_steps(model_cls, math, verbose)
+
+
 @lru_cache(maxsize=64)
-def vector_steps(model_cls, verbose: bool = True) -> VectorSteps | None:
-    """The vector steps of a model class compiled (cached like every kernel), or None: no
-    compiler, ``GAITOPT_LANES=0``, a step that is not an SX function or is larger than
-    :data:`MAX_INSTRUCTIONS`, or a failed compile (the batch then runs the scalar driver)."""
+def _vector_steps(model_cls, math: str, verbose: bool) -> VectorSteps | None:
     cc = compiler()
-    if cc is None or os.environ.get("GAITOPT_LANES", "1") == "0":
+    if cc is None:
         return None
     try:
         functions = _step_functions(model_cls)
         if any(f.n_instructions() > MAX_INSTRUCTIONS for _, f in functions):
             return None
-        body = "".join(emit(f, name) for name, f in functions)
     except (RuntimeError, TypeError, NotImplementedError):
         return None
     names = [name for name, _ in functions]
+    n_p = {name: f.nnz_in(5) for name, f in functions}
+    isa = host_flags()
+    tries = [(math, isa), ("exact", isa), ("exact", ())] if isa else [(math, ()), ("exact", ())]
+    if math == "fast" and platform.machine().lower() not in ("x86_64", "amd64"):
+        tries = [t for t in tries if t[0] == "exact"]
     errors = []
-    for clones in (True, False):  # target_clones needs GCC on x86-64 with ifunc support
-        source = ("#define GAITOPT_CLONES 1\n" if clones else "") + HEADER + body
+    for kind, extra in dict.fromkeys(tries):
         try:
-            return VectorSteps(_build(cc, source, STEP_FLAGS, verbose), names)
+            body = "".join(emit(f, name, kind) for name, f in functions)
+        except NotImplementedError:
+            return None
+        source = HEADER + (MVEC if kind == "fast" else "") + body
+        link = ("-Wl,--no-as-needed", "-lmvec") if kind == "fast" else ()
+        try:
+            steps = VectorSteps(_build(cc, source, STEP_FLAGS + extra + link, verbose), names, n_p)
         except (OSError, subprocess.SubprocessError) as exc:
             errors.append(exc)
+            continue
+        steps.math = kind
+        return steps
     if verbose:
         print(f"gaitopt: could not compile the vector steps ({errors[-1]}); one start at a time",
               file=sys.stderr)  # fmt: skip

@@ -98,10 +98,31 @@ def _starts(prepared, model, rows: np.ndarray, u: np.ndarray, full_state: bool):
     return np.ascontiguousarray(np.where(valid[:, None], x, 0.0)), valid
 
 
+def _lanes(model_cls, constraints: bool, n_p: int):
+    """``(gaitopt_lanes, its vector step table)`` where the model class has vector steps whose
+    parameter vector has ``n_p`` entries (:mod:`gaitopt.kernels.lane_driver`), else None."""
+    from ..kernels.batch_driver import lanes_library
+    from ..kernels.vector_step import vector_steps
+
+    steps = vector_steps(model_cls)
+    run = lanes_library() if steps is not None else None
+    if run is None:
+        return None
+    phases = model_cls.structure().phases
+    if any(steps.n_p(i, constraints) != n_p for i in range(len(phases))):
+        return None
+    table = (ctypes.c_void_p * len(phases))(
+        *(steps.address(i, constraints) for i in range(len(phases)))
+    )
+    return run, table, steps
+
+
 def run_compiled(run, model, library: ArcLibrary, rows, u, full_state, steps, rtol, atol,
                  max_phase_time, constraints, record_events) -> dict:  # fmt: skip
-    """Simulate every row in ``gaitopt_batch`` (``run``, the batch library's function): the
-    columns of :class:`gaitopt.simulation.batch.BatchSimulation` (see there)."""
+    """Simulate every row in ``gaitopt_batch`` (``run``, the batch library's function), or
+    where the model class has vector steps in ``gaitopt_lanes`` (the same outcomes to the bit,
+    :data:`~gaitopt.kernels.vector_step.LANES` starts per step call): the columns of
+    :class:`gaitopt.simulation.batch.BatchSimulation` (see there)."""
     prepared = _prepared(type(model), library, bool(constraints))
     lay = prepared[0]
     N, n0 = rows.shape[0], model.phases[0].n
@@ -111,7 +132,10 @@ def run_compiled(run, model, library: ArcLibrary, rows, u, full_state, steps, rt
     u_in = np.ascontiguousarray(u[:1] if shared_u else u).ravel()
     u_in = u_in if u_in.size else np.zeros(1)
     p = np.ascontiguousarray(model.p, dtype=float).ravel()
+    n_p = p.size
+    lanes = _lanes(type(model), bool(constraints), n_p) if N >= 2 else None
     p = p if p.size else np.zeros(1)
+    p_stride = 0  # dims[8]: one parameter vector for all starts
     # SciPy's solvers raise rtol to 100 eps (compiled.py: integrate_arc does the same)
     opts = np.array([max(float(rtol), 100 * np.finfo(float).eps), atol, max_phase_time])
     status = np.where(valid, 0, _INVALID).astype(np.int32)
@@ -127,7 +151,8 @@ def run_compiled(run, model, library: ArcLibrary, rows, u, full_state, steps, rt
     while True:  # once, or again for the starts whose events overflowed their buffer
         k = todo.size
         n_u = len(model.inputs)
-        dims = [k, len(model.phases), lay.E, steps, n_u, 0 if shared_u else n_u, lay.nmax, cap]
+        dims = [k, len(model.phases), lay.E, steps, n_u, 0 if shared_u else n_u, lay.nmax, cap,
+                p_stride]  # fmt: skip
         dims = np.array(dims, dtype=np.int32)
         st, la, re, te, pe, ac = (
             a[todo].copy() for a in (status, last, returns, t_end, phase_end, acc)
@@ -141,11 +166,16 @@ def run_compiled(run, model, library: ArcLibrary, rows, u, full_state, steps, rt
         ev_a = np.zeros(max(k * cap * lay.nmax, 1))
         ui = u_in if shared_u else np.ascontiguousarray(u[todo]).ravel()
         xi = np.ascontiguousarray(x0[todo])
-        code = run(*map(address, (dims, lay.phase_dims, lay.trans, lay.flags, lay.dirs)),
-                   ctypes.addressof(lay.fns), ctypes.addressof(lay.resets),
-                   ctypes.addressof(lay.starts),
-                   *map(address, (ui, p, opts, xi, st, la, re, te, pe, ac, stt, sx, counts,
-                                  ev_t, ev_code, ev_b, ev_a)))  # fmt: skip
+        call = (*map(address, (dims, lay.phase_dims, lay.trans, lay.flags, lay.dirs)),
+                ctypes.addressof(lay.fns), ctypes.addressof(lay.resets),
+                ctypes.addressof(lay.starts),
+                *map(address, (ui, p, opts, xi, st, la, re, te, pe, ac, stt, sx, counts,
+                               ev_t, ev_code, ev_b, ev_a)))  # fmt: skip
+        if lanes is not None and k >= 2:
+            extra = np.array([n_p, dims.size], dtype=np.int32)
+            code = lanes[0](*call, ctypes.addressof(lanes[1]), address(extra))
+        else:
+            code = run(*call)
         if code:
             raise RuntimeError(f"the compiled batch simulation of {model.name} failed")
         status[todo], last[todo], returns[todo] = st, la, re
