@@ -27,6 +27,9 @@ import os
 import platform
 import subprocess
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from functools import lru_cache
 from pathlib import Path
 
@@ -36,7 +39,8 @@ from ..errors import GaitoptInputError
 from .cache import _compile, _key, cache_dir, compiler
 from .verify import CHECKS_PER_STEP, STEP_FLAGS, phase_events
 
-__all__ = ["LANES", "MATH", "MAX_INSTRUCTIONS", "VectorSteps", "emit", "host_flags", "vector_steps"]
+__all__ = ["LANES", "MATH", "MAX_INSTRUCTIONS", "VectorSteps", "emit", "host_flags", "vector_math",
+           "vector_steps"]  # fmt: skip
 
 #: Starts per vector step call (one AVX-512 register of doubles; two AVX2, four SSE2 ones).
 LANES = 8
@@ -45,8 +49,25 @@ LANES = 8
 #: compiles in seconds).
 MAX_INSTRUCTIONS = 60_000
 
-#: The vector steps' ``sin`` and ``cos`` by default (:func:`vector_steps`).
+#: The vector steps' ``sin`` and ``cos`` by default (:func:`vector_steps`): ``"exact"``, the C
+#: library's per lane (each lane the scalar step's bits).
 MATH = "exact"
+_MATHS = ("exact", "fast")
+_CONTEXT: ContextVar[str | None] = ContextVar("gaitopt_vector_math", default=None)
+
+
+@contextmanager
+def vector_math(math: str) -> Iterator[None]:
+    """Within the block, the vector steps' ``sin``/``cos`` are ``math`` (``"exact"`` or
+    ``"fast"``, :func:`vector_steps`) unless ``$GAITOPT_VECTOR_MATH`` says otherwise."""
+    if math not in _MATHS:
+        raise GaitoptInputError(f"`math` must be 'exact' or 'fast', got {math!r}")
+    token = _CONTEXT.set(math)
+    try:
+        yield
+    finally:
+        _CONTEXT.reset(token)
+
 
 _OPS = {getattr(ca, name): name[3:] for name in dir(ca) if name.startswith("OP_")}
 #: Vector arithmetic (CasADi's printing: ``casadi_sq(x)`` is ``x*x``, twice ``2.*x``).
@@ -291,11 +312,12 @@ def vector_steps(model_cls, math: str | None = None, verbose: bool = True) -> Ve
     function or is larger than :data:`MAX_INSTRUCTIONS`, or a failed compile (the batch then
     runs the scalar driver, one start at a time).  ``math``: ``"exact"`` (the C library's
     ``sin``/``cos`` per lane: the scalar step's bits) or ``"fast"`` (libmvec's, on x86-64 with
-    glibc; else exact); default ``$GAITOPT_VECTOR_MATH``, else :data:`MATH`."""
+    glibc; else exact); default ``$GAITOPT_VECTOR_MATH``, else the innermost
+    :func:`vector_math` block's, else :data:`MATH`."""
     if os.environ.get("GAITOPT_LANES", "1") == "0":
         return None
-    math = math or os.environ.get("GAITOPT_VECTOR_MATH") or MATH
-    if math not in ("exact", "fast"):
+    math = math or os.environ.get("GAITOPT_VECTOR_MATH") or _CONTEXT.get() or MATH
+    if math not in _MATHS:
         raise GaitoptInputError(
             f"`math` (GAITOPT_VECTOR_MATH) must be 'exact' or 'fast', got {math!r}"
         )
