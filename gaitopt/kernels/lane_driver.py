@@ -304,10 +304,7 @@ static int gaitopt_lane_after(gaitopt_run* R, gaitopt_lane* L) {
     L->y_new[i] = out[0][i * GAITOPT_W + l];
     L->f_new[i] = out[1][i * GAITOPT_W + l];
   }
-  for (i = 0; i < 7 * n; i++) L->F[i] = out[3][i * GAITOPT_W + l];
   for (i = 0; i < m * GAITOPT_CHECKS; i++) L->G[i] = out[4][i * GAITOPT_W + l];
-  gaitopt_lane_ctx(R, L, &c);
-  c.F = L->F; c.yold = L->yold; c.t_old = tt; c.t_new = t_new;
   finished = t_new - L->t_bound >= 0;
   for (j = 0; j <= GAITOPT_CHECKS; j++) grid[j] = j * ((t_new - tt) / GAITOPT_CHECKS) + tt;
   grid[GAITOPT_CHECKS] = t_new;
@@ -324,7 +321,10 @@ static int gaitopt_lane_after(gaitopt_run* R, gaitopt_lane* L) {
         if (L->sg[k * GAITOPT_CHECKS + j] < -GAITOPT_ARM) armed[k] = 1;
       values[k] = L->sg[k * GAITOPT_CHECKS + GAITOPT_CHECKS - 1];
     }
-  } else {
+  } else { /* the lane's context for the dense output and the events (built only here) */
+    for (i = 0; i < 7 * n; i++) L->F[i] = out[3][i * GAITOPT_W + l];
+    gaitopt_lane_ctx(R, L, &c);
+    c.F = L->F; c.yold = L->yold; c.t_old = tt; c.t_new = t_new;
     for (k = 0; k < m; k++) {
       double previous = values[k];
       int was_armed = armed[k] != 0;
