@@ -6,18 +6,23 @@ Each SX instruction becomes one operation on a GCC vector of :data:`LANES` doubl
 (``typedef double gaitopt_v __attribute__((vector_size(64)))``): ``+ − × ÷``, negation, square
 and twice as vector arithmetic, every other operation (``sin``, ``cos``, ``sqrt``, ``fabs``,
 ``fmax``, ``pow``, comparisons…) per lane with the C library's scalar function, as CasADi's
-generated C calls it (:data:`_LANEWISE`).  A ``sin`` and a ``cos`` of the same value are
-computed in one loop over the lanes, where GCC makes them one ``sincos`` as it does in the
-scalar step.  The operations and their order are the scalar step's (the instruction list is what
-CasADi's code generator prints), compiled with the same ``-ffp-contract=off`` (no fused
-multiply-adds): the vector step gives each lane the scalar step's numbers to the bit (tested,
-``tests/test_vector_step.py``).  Nothing relies on auto-vectorisation; the step function is
-compiled for AVX-512, AVX2 and baseline x86-64 at once (``target_clones``: the loader picks the
-host's), elsewhere for the compiler's default target, where GCC lowers each vector operation to
-the widest the target has.
+generated C calls it (:data:`_LANEWISE`).  The instructions are value-numbered (an operation on
+the values of an earlier one is that one, as gcc's value numbering does in the scalar step), so
+a ``sin`` and a ``cos`` of one value are one ``sincos`` per lane, as gcc makes them in the
+scalar step.  The operations and their order are the scalar step's (the instruction list is
+what CasADi's code generator prints), compiled with the same ``-ffp-contract=off`` (no fused
+multiply-adds): with ``math="exact"`` the vector step gives each lane the scalar step's numbers
+to the bit (tested, ``tests/test_vector_step.py``).  With ``math="fast"`` its ``sin`` and
+``cos`` are glibc's libmvec (:data:`MVEC`; at most 4 ulp from the correctly rounded value, the
+C library's 1 ulp): 1.7× the starts per second on the compass gait, not the same bits.
+
+Nothing relies on auto-vectorisation.  The library is compiled for the host's widest vector unit
+(:func:`host_flags`: ``-mavx512f``, one instruction per vector operation; ``-mavx2``, two; else
+the compiler's baseline, SSE2 on x86-64, four — the same numbers in each case), so it runs where
+it was compiled (the cache is per machine; the flags are in the library's key).
 
 Layout: lane ``l`` of input (or output) ``j``'s nonzero ``k`` is ``arg[j][k * LANES + l]``
-(structure of arrays, 64-byte aligned by the caller).
+(structure of arrays).
 """
 
 from __future__ import annotations
