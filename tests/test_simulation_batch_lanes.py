@@ -131,3 +131,48 @@ def test_vector_math_block_and_bad_math(monkeypatch):
     monkeypatch.setenv("GAITOPT_VECTOR_MATH", "approximate")
     with pytest.raises(gaitopt.GaitoptInputError, match="GAITOPT_VECTOR_MATH"):
         vector_steps(cls)
+
+
+def test_lanes_honour_a_parameter_vector_per_start(monkeypatch):
+    """dims[8] = p_stride = n_p: start s simulated with row s of p (its guards, flow, resets).
+    The Python API for per-start parameters is not this module's, so the call's dims and p are
+    set here: each start must end exactly (to the bit) as that start alone (the scalar driver)
+    with a model of its own slope."""
+    import ctypes
+
+    monkeypatch.setenv("GAITOPT_LANES", "1")
+    monkeypatch.setenv("GAITOPT_VECTOR_MATH", "exact")
+    compass = gaitopt.model("compass_gait")
+    slopes = np.linspace(0.035, 0.07, 12)
+    models = [gaitopt.model("compass_gait", slope=float(s)) for s in slopes]
+    per_start = np.ascontiguousarray([np.asarray(m.p, dtype=float).ravel() for m in models])
+    centre = compass.section_vector(compass.default_start())
+    rng = np.random.default_rng(8)
+    rows = np.array([m.lift(centre * (1 + 0.05 * rng.standard_normal(centre.size)))
+                     for m in models])  # fmt: skip
+    real = batch_compiled._lanes
+    calls = []
+
+    def with_rows(model_cls, constraints, n_p):
+        run, table, steps = real(model_cls, constraints, n_p)
+
+        def call(*args):
+            dims = (ctypes.c_int32 * 9).from_address(args[0])
+            dims[8] = per_start.shape[1]  # p_stride: a row per start
+            calls.append(dims[0])
+            return run(*args[:9], per_start.ctypes.data, *args[10:])
+
+        return call, table, steps
+
+    monkeypatch.setattr(batch_compiled, "_lanes", with_rows)
+    batch = simulate_batch(compass, rows, steps=8, full_state=True, backend="compiled")
+    assert calls == [len(rows)]
+    monkeypatch.setattr(batch_compiled, "_lanes", real)
+    for i, m in enumerate(models):
+        alone = simulate_batch(m, rows[i : i + 1], steps=8, full_state=True, backend="compiled")
+        assert (batch.status[i], batch.steps[i]) == (alone.status[0], alone.steps[0])
+        assert batch.section_states[i].tobytes() == alone.section_states[0].tobytes()
+        assert batch.t_end[i] == alone.t_end[0]
+    # and the rows did matter: with the one parameter vector (p_stride 0) the states differ
+    shared = simulate_batch(compass, rows, steps=8, full_state=True, backend="compiled")
+    assert shared.section_states.tobytes() != batch.section_states.tobytes()
