@@ -285,6 +285,18 @@ class VectorSteps:
         return ctypes.cast(self.function(phase, constraints), ctypes.c_void_p).value
 
 
+#: Above this many SX instructions in all a model class's steps, its vector steps are compiled
+#: at -O1 (the Strandbeest's 136 000: 33 s of gcc at -O2; the five-link biped's 42 000, 7 s).
+VECTOR_O2_BELOW = 100_000
+
+
+def _flags(instructions: int) -> tuple[str, ...]:
+    """The verification's step flags (:data:`~gaitopt.kernels.verify.STEP_FLAGS`), -O1 above
+    :data:`VECTOR_O2_BELOW` instructions (as the scalar steps above a size), still without fused
+    multiply-adds."""
+    return STEP_FLAGS if instructions < VECTOR_O2_BELOW else ("-O1", *STEP_FLAGS[1:])
+
+
 def _build(cc: str, source: str, flags: tuple[str, ...], verbose: bool) -> ctypes.CDLL:
     library = cache_dir() / f"gaitopt_vstep_{_key(source, cc, flags)}.so"
     if not library.exists():
@@ -355,7 +367,8 @@ def _vector_steps(model_cls, math: str, verbose: bool) -> VectorSteps | None:
         source = HEADER + (MVEC if kind == "fast" else "") + body
         link = ("-Wl,--no-as-needed", "-lmvec") if kind == "fast" else ()
         try:
-            steps = VectorSteps(_build(cc, source, STEP_FLAGS + extra + link, verbose), names, n_p)
+            flags = _flags(sum(f.n_instructions() for _, f in functions)) + extra + link
+            steps = VectorSteps(_build(cc, source, flags, verbose), names, n_p)
         except (OSError, subprocess.SubprocessError) as exc:
             errors.append(exc)
             continue
