@@ -6,7 +6,8 @@ last bit — the same scalar control code per lane and a vector step that gives 
 scalar step's bits (test_vector_step.py) — on compass-gait starts that walk, fall and trip,
 invalid rows, phase time limits too short for a step (timeouts), rimless-wheel starts that rock
 to rest (standing) or roll on, the kneed walker's two phases of different sizes, without the
-unilateral constraints, with an input per start, and with event buffers that overflow.
+unilateral constraints, with an input per start, with event buffers that overflow, with a
+parameter vector per start (dims[8], p_stride), and on every registered passive model.
 
 With libmvec's sin/cos (math "fast", at most 4 ulp from the correctly rounded value by glibc's
 manual, against the C library's 1 ulp) the bits differ; the outcomes must not: the same status
@@ -176,3 +177,18 @@ def test_lanes_honour_a_parameter_vector_per_start(monkeypatch):
     # and the rows did matter: with the one parameter vector (p_stride 0) the states differ
     shared = simulate_batch(compass, rows, steps=8, full_state=True, backend="compiled")
     assert shared.section_states.tobytes() != batch.section_states.tobytes()
+
+
+_PASSIVE = sorted(n for n, c in gaitopt.REGISTRY.items() if c.passive_gait and n != "strandbeest")
+
+
+@pytest.mark.parametrize("name", _PASSIVE)
+def test_lanes_equal_the_scalar_driver_on_every_passive_model(name, monkeypatch):
+    """16 starts within ±5 % of each passive model's default start (seeded), 4 steps, events
+    recorded: the lanes' columns and events equal the scalar driver's to the bit (the
+    Strandbeest, seconds per start, is left to test_simulation_batch's slow run)."""
+    model = gaitopt.model(name)
+    centre = model.section_vector(model.default_start())
+    rng = np.random.default_rng(1)
+    starts = centre * (1 + 0.05 * (2 * rng.random((16, centre.size)) - 1))
+    _bitwise(model, starts, monkeypatch, steps=4, record_events=True)
