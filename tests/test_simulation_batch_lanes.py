@@ -72,6 +72,8 @@ def test_lanes_equal_the_scalar_driver_on_compass_starts(monkeypatch):
     _bitwise(compass, starts[:30], monkeypatch, steps=4, constraints=False, record_events=True)
     torques = np.random.default_rng(3).normal(0.0, 0.5, (30, 1))  # an input per start
     _bitwise(compass, starts[:30], monkeypatch, steps=4, inputs=torques)
+    zero = _bitwise(compass, starts[:10], monkeypatch, steps=0)  # no step asked: ends at once
+    assert set(zero) <= {"completed", "invalid start"}
 
 
 def test_lanes_equal_the_scalar_driver_on_the_rimless_wheel_and_the_kneed_walker(monkeypatch):
