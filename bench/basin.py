@@ -28,6 +28,7 @@ import argparse
 import os
 import sys
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -80,17 +81,28 @@ def run(
         out = f()
         return time.process_time() - cpu, time.perf_counter() - t, out
 
+    for lanes, math in _DRIVERS.values():  # every driver's kernels built and loaded, untimed
+        with _driver(lanes, math):
+            classify_many(setup, model, starts[:8])
+
     measured = []
     for _ in range(rounds):  # the loops and the batch alternate: all see the same load
         py = timed(lambda: [classify(setup, model, s, backend="python") for s in starts[:loop]])
         co = timed(lambda: [classify(setup, model, s) for s in starts[: 10 * loop]])
         ba = timed(lambda: classify_many(setup, model, starts))
+        drivers: dict = {}
+        for name, (lanes, math) in _DRIVERS.items():  # the batch's other drivers
+            with _driver(lanes, math):
+                got = timed(lambda: classify_many(setup, model, starts))
+            drivers[name] = (got[0] / batch, got[2] == ba[2])
         loads.append(os.getloadavg()[0])
         per = (py[0] / loop, co[0] / (10 * loop), ba[0] / batch)
         agree = ba[2][:loop] == py[2] and ba[2][: 10 * loop] == co[2]
         measured.append({"python": per[0], "compiled": per[1], "batch": per[2],
                          "walls": (py[1] / loop, co[1] / (10 * loop), ba[1]),
-                         "agree": agree, "outcomes": ba[2]})  # fmt: skip
+                         "agree": agree, "outcomes": ba[2],
+                         "drivers": {k: v[0] for k, v in drivers.items()},
+                         "drivers_agree": {k: v[1] for k, v in drivers.items()}})  # fmt: skip
     ratios_py = [m["python"] / m["batch"] for m in measured]
     ratios_co = [m["compiled"] / m["batch"] for m in measured]
     median = sorted(measured, key=lambda m: m["python"] / m["batch"])[len(measured) // 2]
@@ -143,6 +155,15 @@ def run(
             "starts_per_s": 1 / batch_s,
             "outcomes": {o: outcomes.count(o) for o in sorted(set(outcomes))},
         },
+        "drivers": {
+            "what": "the same batch through the compiled batch's drivers (median round): "
+            "lanes_fast is what classify_many runs (gaitopt.kernels.lane_driver, "
+            f"{_lanes()} starts per vector step call, libmvec sin/cos), lanes_exact the same with "
+            "the C library's sin/cos per lane (the scalar step's bits), scalar the driver of one "
+            "start at a time (gaitopt_batch)",
+            "vector_isa_flags": _isa(),
+            **{name: _driver_record(median, measured, name) for name in _DRIVERS},
+        },
         "numpy_batch": {
             "what": "simulate_batch(backend='numpy') (stepped from NumPy), once, on a subset",
             "starts": len(subset),
@@ -177,6 +198,45 @@ def run(
             f"processes at most double it",
         },
     }
+
+
+#: The batch's drivers timed beside classify_many's (lanes with libmvec sin/cos): name →
+#: (GAITOPT_LANES, GAITOPT_VECTOR_MATH).
+_DRIVERS = {"lanes_exact": ("1", "exact"), "scalar": ("0", "exact")}
+
+
+@contextmanager
+def _driver(lanes: str, math: str):
+    """The compiled batch's driver chosen through its environment variables, restored after."""
+    old = {k: os.environ.get(k) for k in ("GAITOPT_LANES", "GAITOPT_VECTOR_MATH")}
+    os.environ["GAITOPT_LANES"], os.environ["GAITOPT_VECTOR_MATH"] = lanes, math
+    try:
+        yield
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+def _driver_record(median: dict, measured: list[dict], name: str) -> dict:
+    per = median["drivers"][name]
+    return {"starts_per_s": 1 / per, "s_per_start": per,
+            "ratio_vs_loop_python": median["python"] / per,
+            "outcomes_equal_batch": all(m["drivers_agree"][name] for m in measured)}  # fmt: skip
+
+
+def _lanes() -> int:
+    from gaitopt.kernels.vector_step import LANES
+
+    return LANES
+
+
+def _isa() -> list[str]:
+    from gaitopt.kernels.vector_step import host_flags
+
+    return list(host_flags())
 
 
 def _study_block(args) -> tuple[dict, float]:
@@ -300,7 +360,9 @@ def main(argv: list[str] | None = None) -> int:
         f"per-start loop, Python backend {record['loop_python']['starts_per_s']:.1f} starts/s "
         f"({record['ratio']:.1f}×, goal 50×), compiled arcs "
         f"{record['loop_compiled']['starts_per_s']:.0f} starts/s "
-        f"({record['ratio_vs_compiled_loop']:.2f}×); 10 min ≈ "
+        f"({record['ratio_vs_compiled_loop']:.2f}×); exact-math lanes "
+        f"{record['drivers']['lanes_exact']['starts_per_s']:.0f}, scalar driver "
+        f"{record['drivers']['scalar']['starts_per_s']:.0f} starts/s; 10 min ≈ "
         f"{record['study_10_min']['starts_one_process']} starts in one process"
     )
     if args.study:

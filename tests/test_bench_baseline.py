@@ -93,14 +93,16 @@ def test_bench_record_and_table(tmp_path):
 
 def test_basin_throughput_record():
     """bench/basin.py at a tiny size (64 batched starts, 4 looped by the Python backend, 40 by
-    the compiled arcs): the record's fields, and the looped starts' and the NumPy batch's outcomes
-    equal the compiled batch's (the per-start simulation is the referee; no timing is
-    asserted)."""
+    the compiled arcs): the record's fields, and the looped starts', the NumPy batch's and the
+    compiled batch's other drivers' outcomes equal the compiled batch's (the per-start simulation
+    is the referee; no timing is asserted)."""
     from bench.basin import run as basin_run
 
     record = basin_run(batch=64, loop=4, rounds=1)
     assert record["outcomes_agree_on_loop_starts"] is True
     assert record["numpy_batch"]["outcomes_agree"] is True
+    # the exact-math lanes and the scalar driver classify the same starts the same way
+    assert all(record["drivers"][d]["outcomes_equal_batch"] for d in ("lanes_exact", "scalar"))
     assert sum(record["batch"]["outcomes"].values()) == 64
     anatomy = record["anatomy"]
     assert anatomy["tries_per_start"] >= 1 and anatomy["step_instructions"] > 0

@@ -22,8 +22,9 @@ from functools import lru_cache
 
 from .arc_driver import DRIVER
 from .cache import _compile, _key, cache_dir, compiler
+from .lane_driver import LANES_SOURCE
 
-__all__ = ["BATCH", "SOURCE", "STATUS_CODES", "batch_library"]
+__all__ = ["BATCH", "SOURCE", "STATUS_CODES", "batch_library", "lanes_library"]
 
 #: The status codes ``gaitopt_batch`` writes, in order (``"overflow"``: the start's events did not
 #: fit its event buffer; the caller runs it again with a larger one).
@@ -312,15 +313,14 @@ done:
 }
 """
 
-#: The batch library's whole source: CasADi's default types, the arc driver, the batch loop.
-SOURCE = _PRELUDE + DRIVER + BATCH
+#: The batch library's whole source: CasADi's default types, the arc driver, the batch loop, the
+#: lane driver (:mod:`gaitopt.kernels.lane_driver`: the same loop, several starts per step call).
+SOURCE = _PRELUDE + DRIVER + BATCH + LANES_SOURCE
 
 
 @lru_cache(maxsize=1)
-def batch_library(verbose: bool = True):
-    """``gaitopt_batch`` of the (cached) compiled batch library, a ``ctypes`` function, or None
-    where there is no C compiler (or ``GAITOPT_COMPILE=0``) or compiling fails: the batch
-    simulation then steps its starts from NumPy (:mod:`gaitopt.simulation.batch_phase`)."""
+def _library(verbose: bool = True):
+    """The (cached) compiled batch library, a ``ctypes.CDLL``, or None (:func:`batch_library`)."""
     cc = compiler()
     if cc is None:
         return None
@@ -328,12 +328,35 @@ def batch_library(verbose: bool = True):
     try:
         if not library.exists():
             _compile(SOURCE, cc, library, "gaitopt_batch_driver", verbose)
-        run = ctypes.CDLL(str(library)).gaitopt_batch
+        return ctypes.CDLL(str(library))
     except (OSError, subprocess.SubprocessError) as exc:
         if verbose:
             print(f"gaitopt: could not compile the batch driver ({exc}); batching in NumPy",
                   file=sys.stderr)  # fmt: skip
         return None
+
+
+def lanes_library(verbose: bool = True):
+    """``gaitopt_lanes`` of the batch library (:mod:`gaitopt.kernels.lane_driver`; the arguments
+    of ``gaitopt_batch`` and then the phases' vector steps and ``(n_p, len(dims))``), a
+    ``ctypes`` function, or None where the library is not there."""
+    lib = _library(verbose)
+    if lib is None:
+        return None
+    run = lib.gaitopt_lanes
+    run.restype = ctypes.c_int
+    run.argtypes = [ctypes.c_void_p] * 27
+    return run
+
+
+def batch_library(verbose: bool = True):
+    """``gaitopt_batch`` of the (cached) compiled batch library, a ``ctypes`` function, or None
+    where there is no C compiler (or ``GAITOPT_COMPILE=0``) or compiling fails: the batch
+    simulation then steps its starts from NumPy (:mod:`gaitopt.simulation.batch_phase`)."""
+    lib = _library(verbose)
+    if lib is None:
+        return None
+    run = lib.gaitopt_batch
     run.restype = ctypes.c_int
     run.argtypes = [ctypes.c_void_p] * 25
     return run

@@ -9,8 +9,10 @@ with adaptive steps and located events, against fixed-step RK8 with guard constr
 model functions; compiling only removes CasADi's interpreter from each step (17 → 2 µs for the
 compass gait, 100 → 8 µs for the five-link biped), with identical results.
 
-The step is most of a batch simulation's time (three quarters of a basin's, with the ``sin`` and
-``cos`` it calls; the driver is 5 %), so its library is compiled at ``-O2`` (:data:`STEP_FLAGS`)
+The step is most of the scalar batch driver's time (three quarters of a basin's, with the
+``sin`` and ``cos`` it calls; the driver is 5 %; the lane driver calls the same step's vector form
+instead, :mod:`gaitopt.kernels.vector_step`, compiled with these flags and the host's vector
+unit), so its library is compiled at ``-O2`` (:data:`STEP_FLAGS`)
 where its C is under :data:`STEP_O2_BELOW` bytes: a step 15 % faster than at ``-O1`` for the
 compass gait (0.90 against 1.05 µs, called in a C loop), 23 % for the five-link biped (6.1
 against 7.9 µs), for 3.5 s more of gcc on the largest such library (the five-link biped's).

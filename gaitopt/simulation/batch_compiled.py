@@ -102,12 +102,33 @@ def _starts(prepared, rows: np.ndarray, u: np.ndarray, p: np.ndarray, full_state
     return np.ascontiguousarray(np.where(valid[:, None], x, 0.0)), valid
 
 
+def _lanes(model_cls, constraints: bool, n_p: int):
+    """``(gaitopt_lanes, its vector step table)`` where the model class has vector steps whose
+    parameter vector has ``n_p`` entries (:mod:`gaitopt.kernels.lane_driver`), else None."""
+    from ..kernels.batch_driver import lanes_library
+    from ..kernels.vector_step import vector_steps
+
+    steps = vector_steps(model_cls)
+    run = lanes_library() if steps is not None else None
+    if run is None:
+        return None
+    phases = model_cls.structure().phases
+    if any(steps.n_p(i, constraints) != n_p for i in range(len(phases))):
+        return None
+    table = (ctypes.c_void_p * len(phases))(
+        *(steps.address(i, constraints) for i in range(len(phases)))
+    )
+    return run, table, steps
+
+
 def run_compiled(run, model, library: ArcLibrary, rows, u, p, full_state, steps, rtol, atol,
                  max_phase_time, constraints, record_events) -> dict:  # fmt: skip
     """Simulate every row in ``gaitopt_batch`` (``run``, the batch library's function): the
     columns of :class:`gaitopt.simulation.batch.BatchSimulation` (see there).  ``u``: a row per
     start; ``p``: one parameter vector for all starts, or a row per start (``dims[8]``, the
-    parameter stride, 0 or n_p)."""
+    parameter stride, 0 or n_p).  Where the model class has vector steps the starts run in
+    ``gaitopt_lanes`` (the same outcomes to the bit, :data:`~gaitopt.kernels.vector_step.LANES`
+    starts per step call)."""
     prepared = _prepared(type(model), library, bool(constraints))
     lay = prepared[0]
     N, n0 = rows.shape[0], model.phases[0].n
@@ -119,6 +140,7 @@ def run_compiled(run, model, library: ArcLibrary, rows, u, p, full_state, steps,
     shared_u = u.shape[0] > 0 and bool(np.all(u == u[:1]))
     u_in = np.ascontiguousarray(u[:1] if shared_u else u).ravel()
     u_in = u_in if u_in.size else np.zeros(1)
+    lanes = _lanes(type(model), bool(constraints), n_p) if N >= 2 else None
     # SciPy's solvers raise rtol to 100 eps (compiled.py: integrate_arc does the same)
     opts = np.array([max(float(rtol), 100 * np.finfo(float).eps), atol, max_phase_time])
     status = np.where(valid, 0, _INVALID).astype(np.int32)
@@ -151,11 +173,16 @@ def run_compiled(run, model, library: ArcLibrary, rows, u, p, full_state, steps,
         xi = np.ascontiguousarray(x0[todo])
         pi = p if shared_p else np.ascontiguousarray(p[todo]).ravel()
         pi = pi if pi.size else np.zeros(1)
-        code = run(*map(address, (dims, lay.phase_dims, lay.trans, lay.flags, lay.dirs)),
-                   ctypes.addressof(lay.fns), ctypes.addressof(lay.resets),
-                   ctypes.addressof(lay.starts),
-                   *map(address, (ui, pi, opts, xi, st, la, re, te, pe, ac, stt, sx, counts,
-                                  ev_t, ev_code, ev_b, ev_a)))  # fmt: skip
+        call = (*map(address, (dims, lay.phase_dims, lay.trans, lay.flags, lay.dirs)),
+                ctypes.addressof(lay.fns), ctypes.addressof(lay.resets),
+                ctypes.addressof(lay.starts),
+                *map(address, (ui, pi, opts, xi, st, la, re, te, pe, ac, stt, sx, counts,
+                               ev_t, ev_code, ev_b, ev_a)))  # fmt: skip
+        if lanes is not None and k >= 2:
+            extra = np.array([n_p, dims.size], dtype=np.int32)
+            code = lanes[0](*call, ctypes.addressof(lanes[1]), address(extra))
+        else:
+            code = run(*call)
         if code:
             raise RuntimeError(f"the compiled batch simulation of {model.name} failed")
         status[todo], last[todo], returns[todo] = st, la, re
