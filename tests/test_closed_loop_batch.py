@@ -6,9 +6,10 @@ Tolerance 1e-9 (m, rad): both run the same compiled DOP853 arcs with each step's
 ground, but the batch integrates each step from time 0 where the referee carries the time on, so
 the step sizes' last bits differ and the states agree to the integrator's tolerance (rtol 1e-11
 over up to 40 steps of an unstable map: measured ≤ 4e-14 for the SLIP here), not bit for bit.
-One difference of outcome follows from it (same steps survived): where the referee's last step
-begins at an apex with ż ≈ 1e-16 far from t = 0, its integrator stops ("failed"), while the
-batch's, from t = 0, finds the fall (see the comment in _agree)."""
+The outcomes are the same: a step that begins at an apex with ż ≈ 1e-16 far from t = 0 once
+stopped the referee's integrator (a short-excursion step bound of 1e-17 s, below 10 ulp of t;
+gaitopt.simulation.phase._short_excursion now leaves out excursions that cannot arm a guard), so
+it is a fall in both."""
 
 from __future__ import annotations
 
@@ -40,14 +41,7 @@ def _agree(policy, model, ground, starts, seeds, amplitude, steps, target):
         ref = gc.closed_loop(policy, model, x0, steps=steps, target=np.asarray(target, float),
                              terrain=gt.random_terrain(ground, seed, amplitude))  # fmt: skip
         assert batch.survived[i] == ref.survived, (seed, batch.message(i), ref.simulation.message)
-        if ref.simulation.status == "failed":
-            # The referee's step begins at an apex whose ż is ~1e-16: the short-excursion step
-            # bound (simulation/phase.py) is then ~1e-17 s, below the smallest step at t ≈ 5 s
-            # (10 ulp of t, ~1e-14) but not at t = 0, where the batch's step begins: there it
-            # integrates on and finds the fall (as gaitopt.simulate from that apex at t = 0).
-            assert batch.status[i] == "fell"
-        else:
-            assert batch.status[i] == ref.simulation.status
+        assert batch.status[i] == ref.simulation.status, (seed, ref.simulation.message)
         if ref.simulation.status == "fell":
             assert batch.message(i).split(" at t")[0] == ref.simulation.message.split(" at t")[0]
         k = ref.survived
@@ -135,3 +129,17 @@ def test_a_policy_with_batch_is_called_once_per_step(slip_design):
     one_by_one = gc.closed_loop_batch(lambda k, x: lqr(k, x), slip, np.full((3, 1), 1.03),
                                       steps=6, terrain=terrain, target=[1.0])  # fmt: skip
     np.testing.assert_array_equal(together.section, one_by_one.section)
+
+
+def test_a_step_from_an_apex_late_in_a_run_ends_in_the_fall_not_an_integrator_failure(slip_design):
+    """SLIP with LQR on ±15 cm ground, seed 0: its tenth step begins at an apex with ż ≈ 1e-16
+    at t ≈ 5.4 s.  The short-excursion step bound for that guard was ~1e-17 s, under the
+    smallest step at that time (10 ulp of t), and the run ended "integrator failed" after 9
+    steps (results/slip_rough_terrain before this fix).  An excursion of depth ż²/(2 z̈) ~ 1e-33 m
+    cannot arm the guard, so no bound: the runner's fall is found, as from t = 0."""
+    slip, _, lqr = slip_design
+    run = gc.closed_loop(lqr, slip, {"z": 1.03}, steps=40, target=np.array([1.0]),
+                         terrain=gt.random_terrain(slip, 0, 0.15))  # fmt: skip
+    assert run.survived == 9
+    assert run.simulation.status == "fell", run.simulation.message
+    assert run.simulation.message.startswith("apex below touchdown height")

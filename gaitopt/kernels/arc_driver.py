@@ -288,8 +288,9 @@ CASADI_SYMBOL_EXPORT int gaitopt_arc(void** fns, const int* dims, const double* 
     c.excursion.res[0] = g1; c.excursion.res[1] = g2;
     if (c.excursion.f(c.excursion.arg, c.excursion.res, c.excursion.iw, c.excursion.w, 0))
       goto done;
-    for (k = 0; k < n_tr; k++) /* _short_excursion: tau/4 with tau = 2|g1|/g2 */
-      if (!armed[k] && g1[k] < 0 && 0 < g2[k])
+    for (k = 0; k < n_tr; k++) /* _short_excursion: tau/4 with tau = 2|g1|/g2, where the */
+      if (!armed[k] && g1[k] < 0 && 0 < g2[k] && /* excursion passes half the arming depth */
+          values[k] - 0.5 * g1[k] * g1[k] / g2[k] < -0.5 * GAITOPT_ARM)
         bound = gaitopt_min(bound, 0.5 * fabs(g1[k]) / g2[k]);
     *shortb = (isfinite(bound) && bound > 0) ? bound : 0.0;
     *max_step = *shortb > 0 ? *shortb : INFINITY;

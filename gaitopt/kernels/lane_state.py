@@ -198,8 +198,9 @@ static int gaitopt_lane_top(gaitopt_run* R, gaitopt_lane* L) {
       armed[k] = values[k] < -GAITOPT_ARM;
     }
     if (gaitopt_xup2(&c.excursion, y, L->us, L->ps, g1, g2)) return -1;
-    for (k = 0; k < n_tr; k++) /* _short_excursion: tau/4 with tau = 2|g1|/g2 */
-      if (!armed[k] && g1[k] < 0 && 0 < g2[k])
+    for (k = 0; k < n_tr; k++) /* _short_excursion: tau/4 with tau = 2|g1|/g2, where the */
+      if (!armed[k] && g1[k] < 0 && 0 < g2[k] && /* excursion passes half the arming depth */
+          values[k] - 0.5 * g1[k] * g1[k] / g2[k] < -0.5 * GAITOPT_ARM)
         bound = gaitopt_min(bound, 0.5 * fabs(g1[k]) / g2[k]);
     state[3] = (isfinite(bound) && bound > 0) ? bound : 0.0;
     state[2] = state[3] > 0 ? state[3] : INFINITY;

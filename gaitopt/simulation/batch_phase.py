@@ -278,7 +278,8 @@ class BatchPhases:
                 continue
             g1, g2 = (r[rows] for r in rates(j))
             with np.errstate(all="ignore"):
-                cand = unarmed & (g1 < 0) & (0 < g2)
+                deep = values[:, j] - 0.5 * g1 * g1 / g2 < -0.5 * _ARM  # it can arm
+                cand = unarmed & (g1 < 0) & (0 < g2) & deep
                 bound = np.where(cand, np.minimum(bound, 0.5 * np.abs(g1) / g2), bound)
         short = np.isfinite(bound) & (bound > 0)
         self.short[idx] = np.where(short, bound, np.nan)

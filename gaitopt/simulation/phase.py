@@ -228,7 +228,9 @@ _CONSTRAINT_RATE = 1e-9
 _CONSTRAINT_START = 1e-9
 
 
-def _short_excursion(funcs: PhaseFunctions, x0: np.ndarray, armed: np.ndarray) -> float | None:
+def _short_excursion(
+    funcs: PhaseFunctions, x0: np.ndarray, armed: np.ndarray, values: np.ndarray
+) -> float | None:
     """A step bound that lets the guard checks see a short excursion at the phase start.
 
     A phase that starts on a guard (a rimless wheel rocking onto a spoke at a few mm/s) may leave
@@ -236,8 +238,13 @@ def _short_excursion(funcs: PhaseFunctions, x0: np.ndarray, armed: np.ndarray) -
     the step's interior points would miss it, and the wheel would sink through the ground.  For
     each transition that starts unarmed and moves to its armed side (signed rate ``ġ < 0``) with
     a curvature that brings it back (``g̈ > 0``), the excursion lasts about ``τ = 2|ġ|/g̈``
-    (second-order Taylor); the returned bound ``τ/4`` holds until every guard is armed.  None if
-    no such excursion."""
+    (second-order Taylor); the returned bound ``τ/4`` holds until every guard is armed.  An
+    excursion that cannot arm its guard is left out: from the signed value ``v₀`` (``values``)
+    it reaches ``v₀ − ġ²/(2 g̈)``, and unless that passes half the arming depth ``_ARM`` (a factor
+    2 of margin on the Taylor estimate) the guard can neither arm nor fire on it.  (A phase that
+    starts at an apex with ``ż ≈ 1e-16`` otherwise gets a bound near 1e-17 s, below the smallest
+    step SciPy's solvers take at ``t ≈ 5 s``, 10 ulp of ``t``: the integrator stopped there.)
+    None if no such excursion."""
     bound = np.inf
     for k, tr in enumerate(funcs.phase.transitions):
         if armed[k]:
@@ -245,7 +252,7 @@ def _short_excursion(funcs: PhaseFunctions, x0: np.ndarray, armed: np.ndarray) -
         rate = rate_along(funcs.phase.flow, tr.guard)
         g1 = tr.direction * float(rate(x0, funcs.u, funcs.p))
         g2 = tr.direction * float(rate_along(funcs.phase.flow, rate)(x0, funcs.u, funcs.p))
-        if g1 < 0 < g2:
+        if g1 < 0 < g2 and values[k] - 0.5 * g1 * g1 / g2 < -0.5 * _ARM:
             bound = min(bound, 0.5 * abs(g1) / g2)
     return float(bound) if np.isfinite(bound) and bound > 0 else None
 
@@ -376,7 +383,7 @@ def integrate_phase(funcs: PhaseFunctions, solver_cls, t0, x0, rtol, atol, max_t
     directions = np.array(funcs._directions, dtype=float)[:, None]
     values = np.array([funcs.signed_guard(k, x0, t0) for k in range(n_tr)], dtype=float)
     armed = values < -_ARM
-    short = _short_excursion(funcs, x0, armed)
+    short = _short_excursion(funcs, x0, armed, values)
     if short is not None:
         solver.max_step = short
     ts = [t0]
