@@ -24,7 +24,9 @@ __all__ = ["Evaluation", "Assembly"]
 @dataclass
 class Evaluation:
     """The shooting equations at one point: ``F`` and (with ``jacobian``) ``∂F/∂w``, ``∂F/∂u``,
-    ``∂F/∂p``; the return state, each phase's end state, guard rate, admissibility, duration."""
+    ``∂F/∂p``; the return state, each phase's end state, guard rate, admissibility, duration;
+    and, where the compiled Newton (:mod:`gaitopt.kernels.newton`) converged here, the return
+    map's Jacobians ``(A, B_u, B_p)`` from the same ``∂F/∂w`` (None otherwise)."""
 
     F: np.ndarray
     F_w: np.ndarray | None
@@ -35,6 +37,7 @@ class Evaluation:
     rates: np.ndarray
     admissible: np.ndarray
     durations: np.ndarray
+    return_map: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
 
 class Assembly:
@@ -66,6 +69,15 @@ class Assembly:
         self._residual: tuple[ca.Function, list] | None = None
         self._buffers = threading.local()
 
+    def compiled_newton(self):
+        """The compiled Newton on this system (:class:`gaitopt.kernels.newton.CompiledNewton`),
+        built on first use, or None where it cannot be (no compiler, kernels not compiled)."""
+        if "_compiled_newton" not in self.__dict__:
+            from .newton import CompiledNewton
+
+            self.__dict__["_compiled_newton"] = CompiledNewton.build(self)
+        return self.__dict__["_compiled_newton"]
+
     def _chain(self, phase: dict) -> tuple[ca.Function, list]:
         """The chain's function of ``phase`` (per phase index, a :func:`phase_function` or
         :func:`phase_residual_function`) and its outputs' shapes."""
@@ -94,7 +106,7 @@ class Assembly:
 
     def __getstate__(self) -> dict:
         # Buffers are per thread; the assembled functions are rebuilt where they are used.
-        skip = ("_buffers", "_assembled_jac", "_assembled_res")
+        skip = ("_buffers", "_assembled_jac", "_assembled_res", "_compiled_newton")
         return {k: v for k, v in self.__dict__.items() if k not in skip}
 
     def __setstate__(self, state: dict) -> None:

@@ -319,6 +319,17 @@ class ShootingProblem(SymbolicShooting):
         Jacobian (:func:`gaitopt.orbit.sensitivity.section_jacobians`)."""
         return map_blocks(F_w, self.m, self.n_g)
 
+    def correction(self, F_w, w, u, p) -> np.ndarray:
+        """``−(∂F/∂w)⁻¹ F_fine(w)``: one Newton correction from ``w`` towards the mesh with twice
+        the RK steps per segment (:meth:`fine_residual`), in one compiled call where the system
+        has the compiled Newton (:mod:`gaitopt.kernels.newton`), else by :meth:`newton_step`;
+        raises ``LinAlgError`` where ``F_w`` is singular."""
+        asm = self.assembly()
+        compiled = asm.compiled_newton() if asm is not None else None
+        if compiled is not None:
+            return compiled.correction(F_w, w, u, p, 2 * self.disc.rk_steps)
+        return self.newton_step(F_w, self.fine_residual(w, u, p))
+
     def newton_step(self, F_w, F) -> np.ndarray:
         """``−(∂F/∂w)⁻¹ F``: one Newton correction (raises ``LinAlgError`` where singular)."""
         return -np.linalg.solve(np.asarray(F_w, dtype=float), np.asarray(F, dtype=float).ravel())
