@@ -3,9 +3,10 @@
 A warm :func:`gaitopt.find_limit_cycle` (the model at its defaults, default start, ``verify=True``,
 after one untimed call) is timed ``repeats`` times with each stage of the one sequence wrapped by
 a timer: the argument checks, the guess's simulation and its nodes, Newton (with the number and
-time of its Jacobian evaluations: the residual, the compiled kernels and the assembly, one CasADi
-call each), the discretisation-error estimate, the pre-check, the certificate (with the dense
-samples it reads), the multipliers, the referee's simulation and the result.  Each stage's CPU
+time of its Jacobian evaluations from Python: the residual, the compiled kernels and the assembly,
+one CasADi call each; or the one call of the compiled Newton, :mod:`gaitopt.kernels.newton`,
+which evaluates them inside), the discretisation-error estimate, the pre-check, the certificate
+(with the dense samples it reads), the multipliers, the referee's simulation and the result.  Each stage's CPU
 time (``time.process_time``: on a shared machine wall time includes waiting for a core) is the
 median over the repeats; ``other`` is the median total less the stages' medians (the Python
 between them).  The machine's load is recorded beside the numbers.
@@ -37,14 +38,15 @@ from typing import Any
 __all__ = ["STAGES", "anatomy", "main"]
 
 #: (label, module, attribute path) of each timed stage, in the order a solve runs them; labels
-#: starting with two spaces are parts of the stage above them (the Jacobian evaluations: the
-#: calls with ``jacobian=True``; the residual-only ones count in their stage, e.g. the error
-#: estimate's finer mesh).
+#: starting with two spaces are parts of the stage above them (the compiled Newton's one call,
+#: or the Jacobian evaluations from Python where it does not run: the calls with
+#: ``jacobian=True``; the residual-only ones count in their stage).
 STAGES = (
     ("arguments", "gaitopt.search", "check_arguments"),
     ("guess simulation", "gaitopt.shooting.gait", "simulate"),
     ("guess nodes", "gaitopt.shooting.problem", "ShootingProblem.unknowns_from_simulation"),
     ("Newton", "gaitopt.shooting.problem", "ShootingProblem.solve"),
+    ("  compiled Newton (one call)", "gaitopt.kernels.newton", "CompiledNewton.solve"),
     ("  Jacobian evaluations (F, ∂F/∂w)", "gaitopt.kernels.assemble", "Assembly.__call__"),
     ("error estimate", "gaitopt.shooting.transcription", "ShootingTranscription.error_estimate"),
     ("pre-check", "gaitopt.shooting.transcription", "ShootingTranscription.precheck"),
@@ -103,6 +105,7 @@ def anatomy(name: str, repeats: int) -> dict[str, Any]:
             t0, c0 = time.perf_counter(), time.process_time()
             cycle = gaitopt.find_limit_cycle(model)
             cpu.append(time.process_time() - c0)
+            iterations = cycle.iterations
             wall.append(time.perf_counter() - t0)
             for label in per_stage:
                 per_stage[label].append(spent.get(label, 0.0))
@@ -118,6 +121,7 @@ def anatomy(name: str, repeats: int) -> dict[str, Any]:
         "wall_ms": 1e3 * statistics.median(wall),
         "stages_ms": {**stages, "other": total - top},
         "calls_per_solve": {label: calls.get(label, 0) / repeats for label in per_stage},
+        "newton_iterations": iterations,  # Jacobians evaluated (in the compiled call or not)
     }
 
 
@@ -226,7 +230,8 @@ def main(argv: list[str] | None = None) -> int:
         entry = record["models"][name] = anatomy(name, repeats)
         entry["kernel_steps"] = kernel_steps(name)
         print(f"{name}: CPU {entry['cpu_ms']:.2f} ms median (min {entry['cpu_min_ms']:.2f}), "
-              f"wall {entry['wall_ms']:.2f} ms")  # fmt: skip
+              f"wall {entry['wall_ms']:.2f} ms, {entry['newton_iterations']} Newton "
+              f"iterations")  # fmt: skip
         for label, ms in entry["stages_ms"].items():
             n = entry["calls_per_solve"].get(label)
             print(f"  {label:34s} {ms:7.3f} ms" + (f"  ×{n:g}" if n else ""))

@@ -104,7 +104,8 @@ def _spec(f) -> np.ndarray:
 
 
 def _address(lib: ctypes.CDLL, name: str) -> tuple[int, int]:
-    return tuple(ctypes.cast(getattr(lib, s), ctypes.c_void_p).value for s in (name, f"{name}_work"))
+    f, work = (ctypes.cast(getattr(lib, s), ctypes.c_void_p).value for s in (name, f"{name}_work"))
+    return f, work
 
 
 class _Handle:

@@ -435,7 +435,11 @@ static int gn_lu(double* A, int* piv, int n) {
     piv[k] = best;
     if (A[best * n + k] == 0.0) return 1;
     if (best != k)
-      for (j = 0; j < n; j++) { double t = A[k * n + j]; A[k * n + j] = A[best * n + j]; A[best * n + j] = t; }
+      for (j = 0; j < n; j++) {
+        double t = A[k * n + j];
+        A[k * n + j] = A[best * n + j];
+        A[best * n + j] = t;
+      }
     for (i = k + 1; i < n; i++) {
       double f = (A[i * n + k] /= A[k * n + k]);
       if (f != 0.0)
