@@ -2,14 +2,15 @@
 
 A warm :func:`gaitopt.find_limit_cycle` (the model at its defaults, default start, ``verify=True``,
 after one untimed call) is timed ``repeats`` times with each stage of the one sequence wrapped by
-a timer: the argument checks, the guess's simulation and its nodes, Newton (with the number and
-time of its Jacobian evaluations from Python: the residual, the compiled kernels and the assembly,
-one CasADi call each; or the one call of the compiled Newton, :mod:`gaitopt.kernels.newton`,
-which evaluates them inside), the discretisation-error estimate, the pre-check, the certificate
-(with the dense samples it reads), the multipliers, the referee's simulation and the result.  Each stage's CPU
-time (``time.process_time``: on a shared machine wall time includes waiting for a core) is the
-median over the repeats; ``other`` is the median total less the stages' medians (the Python
-between them).  The machine's load is recorded beside the numbers.
+a timer: the argument checks, the guess's simulation and its nodes, Newton (the one call of the
+compiled Newton, :mod:`gaitopt.kernels.newton`, which evaluates the Jacobians inside; or, where
+it does not run, the number and time of its Jacobian evaluations from Python: the residual, the
+compiled kernels and the assembly, one CasADi call each), the discretisation-error estimate, the
+pre-check, the certificate (with the dense samples it reads), the multipliers, the referee's
+simulation and the result.  Each stage's CPU time (``time.process_time``: on a shared machine
+wall time includes waiting for a core) is the median over the repeats; ``other`` is the median
+total less the stages' medians (the Python between them).  The machine's load is recorded beside
+the numbers.
 
 With Drake installed, the compass gait's warm verified solve is also set against Drake's
 ``CompassGait`` simulated from the same start until consecutive post-impact states agree to 1e-8

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from .cache import FLAGS_O2, _compile, _key, cache_dir, compiler, source_key
+from .evaluation import Evaluation
 from .newton_driver import SOURCE
 
 __all__ = ["CONVERGED", "CompiledNewton", "driver"]
@@ -201,8 +202,6 @@ class CompiledNewton:
         return h
 
     def _evaluation(self, h: _Handle, w: np.ndarray, jacobian: bool, return_map=None):
-        from .assemble import Evaluation
-
         split, at = [], 0
         ends = h.ends.copy()
         for n in self.n:
