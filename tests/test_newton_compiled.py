@@ -155,3 +155,24 @@ def test_without_a_compiler_the_same_gait():
     assert abs(period - here.period) <= 1e-10
     mine = np.array([[z.real, z.imag] for z in here.multipliers])
     assert np.max(np.abs(np.asarray(mult) - mine)) <= 1e-10
+
+
+@needs_compiler
+@pytest.mark.parametrize("name", ["compass_gait", "kneed_walker"])
+def test_compiled_dense_samples_are_the_trajectory_function(name):
+    # Source: the dense samples by the mapped CasADi trajectory function (the step kernels
+    # from each segment start, the lift by the model's section function): bitwise the same
+    # (tolerance 0: the same compiled steps on the same starts and step size).
+    from gaitopt.fastcall import call1
+    from gaitopt.kernels import trajectory_function
+
+    model, t, compiled, u, p = _setup(name)
+    pr = t.problem
+    w = t.guess()
+    S, q = pr.disc.segments, pr.disc.dense
+    starts, durations = pr.segment_starts(w, p), pr.durations(w)
+    want = [call1(trajectory_function(pr.model_cls, i, S, q), starts[k], u, p, durations[k] / S)
+            for k, i in enumerate(pr.chain)]  # fmt: skip
+    got = compiled.samples(w, u, p, q)
+    assert len(got) == len(want)
+    assert all(np.array_equal(a, b) for a, b in zip(got, want, strict=True))

@@ -69,6 +69,8 @@ def driver(verbose: bool = True) -> ctypes.CDLL | None:
     lib.gaitopt_newton_solve.argtypes = [vp, vp, vp, vp, i, i, d, d, vp]
     lib.gaitopt_newton_map.restype = i
     lib.gaitopt_newton_map.argtypes = [vp, vp, vp, vp]
+    lib.gaitopt_newton_samples.restype = i
+    lib.gaitopt_newton_samples.argtypes = [vp, vp, vp, vp, i, vp]
     lib.gaitopt_newton_correct.restype = i
     lib.gaitopt_newton_correct.argtypes = [vp, vp, vp, vp, i, vp]
     return lib
@@ -290,3 +292,22 @@ class CompiledNewton:
         if code:
             raise RuntimeError(f"a compiled kernel failed (code {code})")
         return out
+
+    def samples(self, w, u, p, steps: int) -> list[np.ndarray]:
+        """Per chain element, the states at each segment's start and after each of ``steps`` RK
+        steps without derivatives (``n × S·(steps + 1)``): the dense samples of
+        :meth:`ShootingProblem.sample_numeric`, by the same step kernels."""
+        h = self._handle()
+        w, u, p = (self._vector(a, s) for a, s in ((w, self.size), (u, self.n_u), (p, self.n_p)))
+        cols = self.S * (steps + 1)
+        out = np.zeros(sum(self.n) * cols)
+        code = self.lib.gaitopt_newton_samples(
+            h.ptr, w.ctypes.data, u.ctypes.data, p.ctypes.data, steps, out.ctypes.data
+        )
+        if code:
+            raise RuntimeError(f"a compiled kernel failed (code {code})")
+        blocks, at = [], 0
+        for n in self.n:
+            blocks.append(out[at : at + n * cols].reshape(cols, n).T)
+            at += n * cols
+        return blocks

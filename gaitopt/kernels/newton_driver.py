@@ -18,6 +18,8 @@ an argument.  It holds
 * ``gaitopt_newton_map`` — the return map's Jacobians at that point by block elimination of the
   same Jacobian (eq. (1) of :mod:`gaitopt.orbit.sensitivity`: ``A = P_s − P_z G_z⁻¹ G_s``,
   ``B_u``, ``B_p`` likewise, ``G_z`` factored once);
+* ``gaitopt_newton_samples`` — the dense samples: each segment's states after each of ``N`` RK
+  steps without derivatives (``step_i``; :func:`gaitopt.kernels.trajectory_function`'s);
 * ``gaitopt_newton_correct`` — the error estimate's step ``−(∂F/∂w)⁻¹ F_fine`` with ``F_fine``
   the residual on a mesh with more RK steps (:meth:`ShootingTranscription.correction`).
 
@@ -419,6 +421,43 @@ CASADI_SYMBOL_EXPORT int gaitopt_newton_eval(gn_problem* h, const double* w, con
     }
   }
   return row == size ? 0 : -4;
+}
+
+/* The dense samples: per chain element, the state at the start of each segment and after each
+   of its N RK steps (without derivatives), n x S (N + 1) column-major, the elements one after
+   the other in out (trajectory_function's samples). */
+CASADI_SYMBOL_EXPORT int gaitopt_newton_samples(gn_problem* h, const double* w, const double* u,
+                                                const double* p, int N, double* out) {
+  int K = h->K, S = h->S, nu = h->nu, np = h->np, k, j, t, code;
+  double Nd = (double)N;
+  const double* args[6];
+  double* outs[3];
+  args[0] = w; args[1] = p;
+  outs[0] = h->xl; outs[1] = 0; outs[2] = 0;
+  if ((code = gn_run(&h->lift, args, 2, outs))) return code;
+  for (k = 0; k < K; k++) {
+    int n = h->n[k], q = n + nu + np + 1;
+    double hs = w[h->offT[k]] / S;
+    if (!h->have_step) memset(h->Da, 0, sizeof(double) * n * q);
+    for (j = 0; j < S; j++) {
+      memcpy(out, gn_start(h, w, k, j), sizeof(double) * n);
+      for (t = 0; t < N; t++) {
+        args[0] = out; outs[0] = out + n;
+        if (h->have_step) {
+          args[1] = u; args[2] = p; args[3] = &hs; args[4] = &Nd;
+          code = gn_run(&h->step[k], args, 5, outs);
+        } else {  /* the fold with D = 0 (its derivatives not wanted) */
+          args[1] = h->Da; args[2] = u; args[3] = p; args[4] = &hs; args[5] = &Nd;
+          outs[1] = h->Db;
+          code = gn_run(&h->fold[k], args, 6, outs);
+        }
+        if (code) return code;
+        out += n;
+      }
+      out += n;
+    }
+  }
+  return 0;
 }
 
 /* LU with partial pivoting of the n x n row-major A in place (getrf's pivot: the first entry

@@ -192,8 +192,14 @@ class ShootingProblem(SymbolicShooting):
         return out
 
     def sample_numeric(self, w, u, p) -> list[np.ndarray]:
-        """Dense samples of every phase (n × S·(dense + 1)), without the whole graph."""
+        """Dense samples of every phase (n × S·(dense + 1)), without the whole graph: in one
+        call of the compiled Newton's library where the system has it
+        (:meth:`gaitopt.kernels.newton.CompiledNewton.samples`, the same step kernels)."""
         S, q = self.disc.segments, self.disc.dense
+        asm = self.assembly()
+        compiled = asm.compiled_newton() if asm is not None else None
+        if compiled is not None:
+            return compiled.samples(w, u, p, q)
         starts = self.segment_starts(w, p)
         durations = [w[off] for kind, _, off, _ in self.layout if kind == "duration"]
         if self.assembly() is not None:  # the compiled RK step (gaitopt.kernels)
