@@ -42,17 +42,19 @@ def _setup(name: str, steps: int = 1):
 @pytest.mark.parametrize(("name", "steps"), [("compass_gait", 1), ("compass_gait", 2),
                                              ("kneed_walker", 1), ("slip", 1)])  # fmt: skip
 def test_compiled_evaluation_is_the_numpy_assembly(name, steps):
-    # Source: the shooting system assembled block by block in NumPy (Assembly._assemble) at a
-    # perturbed guess.  The residual, the return state, the phase ends, rates and
-    # admissibility are bitwise the same (the same compiled kernels, the same operations); the
-    # Jacobians agree to rounding, 1e-13 of (1 + max |J|) (sums of the same products in another
-    # order; measured ≤ 9e-16).
+    # Source: the shooting system assembled block by block in NumPy (Assembly._assemble), and
+    # as one CasADi MX call (the evaluation without the C library), at a perturbed guess.  The
+    # residual, the return state, the phase ends, rates and admissibility are bitwise the same
+    # (the same compiled kernels, the same operations); the Jacobians agree to rounding, 1e-13
+    # of (1 + max |J|) (sums of the same products in another order; measured ≤ 9e-16).
     model, t, compiled, u, p = _setup(name, steps)
     w = t.guess() + 1e-3 * np.cos(np.arange(t.problem.size))
     asm = t.problem.assembly()
-    for jacobian in (True, False):
+    for jacobian, ref in [(j, asm._assemble(w, u, p, j)) for j in (True, False)] + [
+        (j, asm._read(asm._assembled(j), w, u, p, j))
+        for j in (True, False)  # the MX call
+    ]:
         got = compiled.evaluate(w, u, p, jacobian=jacobian)
-        ref = asm._assemble(w, u, p, jacobian)
         for a, b in zip((got.F, got.x_return, got.rates, got.admissible, got.durations,
                          *got.ends), (ref.F, ref.x_return, ref.rates, ref.admissible,
                                       ref.durations, *ref.ends), strict=True):  # fmt: skip

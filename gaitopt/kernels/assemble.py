@@ -5,6 +5,11 @@ phase of the chain, the gaps between segments, the guard at the phase end, the r
 the next phase; then periodicity ``P − s``.  Each segment end ``x_e = Φ(x_start, u, p, T/S)``
 contributes its block ``∂Φ/∂[x_start; u; p; hs]`` (``hs = T/S``, so ``∂/∂T = ∂/∂hs / S``); the
 first segment start of the chain is ``lift(s, p)``, contributing ``∂lift/∂s`` and ``∂lift/∂p``.
+
+An :class:`Assembly` is evaluated in one C call of the compiled Newton's library where there is
+one (:mod:`gaitopt.kernels.newton`: these blocks, the kernels called by address), else as one
+CasADi MX function (:meth:`Assembly._assembled`), else block by block in NumPy
+(:meth:`Assembly._assemble`, the reference the other two are tested against).
 """
 
 from __future__ import annotations
@@ -137,6 +142,12 @@ class Assembly:
         u = np.asarray(u, dtype=float).ravel()
         p = np.asarray(p, dtype=float).ravel()
         if w.size == self.size and u.size == self.n_u and p.size == self.n_p and self.size:
+            compiled = self.compiled_newton()
+            if compiled is not None:  # the same blocks in one C call (kernels/newton.py)
+                try:
+                    return compiled.evaluate(w, u, p, jacobian=jacobian)
+                except RuntimeError:  # a kernel failed: the CasADi evaluation says how
+                    pass
             f = self._assembled(jacobian)
             if f is not None:
                 return self._read(f, w, u, p, jacobian)
