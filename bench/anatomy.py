@@ -19,7 +19,9 @@ With Drake installed, the compass gait's warm verified solve is also set against
 rounds) in this process, each in CPU and wall time: the issue's goal of 20×, measured with both
 sides under the same load.
 
-Writes ``results/bench_anatomy.json`` (``--out``); ``--quick``: 5 repeats.
+``--compare`` also times each model without the compiled Newton (Newton in Python on the
+one-call CasADi assembly, the solve as before :mod:`gaitopt.kernels.newton`), in alternation
+with it.  Writes ``results/bench_anatomy.json`` (``--out``); ``--quick``: 5 repeats.
 """
 
 from __future__ import annotations
@@ -90,9 +92,28 @@ def _timed(spent: dict[str, float], calls: dict[str, int]) -> Iterator[None]:
             setattr(owner, name, original)
 
 
-def anatomy(name: str, repeats: int) -> dict[str, Any]:
+@contextlib.contextmanager
+def _without_compiled_newton() -> Iterator[None]:
+    """The solve as before the compiled Newton (:mod:`gaitopt.kernels.newton`): every shooting
+    system without it, so Newton runs in Python on the one-call CasADi assembly (put back on
+    exit)."""
+    from gaitopt.kernels.assemble import Assembly
+
+    original = Assembly.__dict__["compiled_newton"]
+    Assembly.compiled_newton = lambda self: None
+    try:
+        yield
+    finally:
+        Assembly.compiled_newton = original
+
+
+def anatomy(name: str, repeats: int, *, compiled: bool = True) -> dict[str, Any]:
     """The stages of ``repeats`` warm verified solves of model ``name`` (see the module
-    docstring): medians in ms, calls per solve, the total's median CPU and wall time."""
+    docstring): medians in ms, calls per solve, the total's median CPU and wall time; with
+    ``compiled=False`` as before the compiled Newton (:func:`_without_compiled_newton`)."""
+    if not compiled:
+        with _without_compiled_newton():
+            return anatomy(name, repeats)
     import gaitopt
 
     model = gaitopt.model(name)
@@ -124,6 +145,23 @@ def anatomy(name: str, repeats: int) -> dict[str, Any]:
         "calls_per_solve": {label: calls.get(label, 0) / repeats for label in per_stage},
         "newton_iterations": iterations,  # Jacobians evaluated (in the compiled call or not)
     }
+
+
+def compare(name: str, repeats: int, rounds: int = 3) -> dict[str, Any]:
+    """:func:`anatomy` with and without the compiled Newton in alternation (``rounds`` of each,
+    ``repeats`` solves per round): the medians of the rounds' medians (CPU ms), so both sides
+    see the same load."""
+    keys = {"cpu": None, "newton": "Newton", "error": "error estimate",
+            "multipliers": "multipliers", "certificate": "certificate"}  # fmt: skip
+    found: dict[str, list[float]] = {f"{side}_{k}_ms": [] for side in ("compiled", "python")
+                                     for k in keys}  # fmt: skip
+    for _ in range(rounds):
+        for side in ("compiled", "python"):
+            entry = anatomy(name, repeats, compiled=side == "compiled")
+            for k, label in keys.items():
+                value = entry["cpu_ms"] if label is None else entry["stages_ms"][label]
+                found[f"{side}_{k}_ms"].append(value)
+    return {"rounds": rounds, **{k: statistics.median(v) for k, v in found.items()}}
 
 
 def versus_drake(repeats: int) -> dict[str, Any] | None:
@@ -221,6 +259,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--models", nargs="+", default=["compass_gait", "kneed_walker"])
     parser.add_argument("--repeats", type=int, default=60)
     parser.add_argument("--quick", action="store_true", help="5 repeats")
+    parser.add_argument("--compare", action="store_true",
+                        help="also without the compiled Newton (Newton in Python, as before "
+                        "it), in alternation with it: three rounds of each")  # fmt: skip
     parser.add_argument("--out", type=Path, default=Path("results/bench_anatomy.json"))
     args = parser.parse_args(argv)
     if args.repeats < 1:
@@ -236,6 +277,17 @@ def main(argv: list[str] | None = None) -> int:
         for label, ms in entry["stages_ms"].items():
             n = entry["calls_per_solve"].get(label)
             print(f"  {label:34s} {ms:7.3f} ms" + (f"  ×{n:g}" if n else ""))
+        if args.compare:
+            entry["compare"] = compare(name, repeats)
+            c = entry["compare"]
+            print(f"  compiled Newton vs Newton in Python (medians of {c['rounds']} alternating "
+                  f"rounds): whole solve {c['compiled_cpu_ms']:.2f} vs "
+                  f"{c['python_cpu_ms']:.2f} ms, Newton {c['compiled_newton_ms']:.3f} vs "
+                  f"{c['python_newton_ms']:.3f} ms, error estimate "
+                  f"{c['compiled_error_ms']:.3f} vs {c['python_error_ms']:.3f} ms, multipliers "
+                  f"{c['compiled_multipliers_ms']:.3f} vs {c['python_multipliers_ms']:.3f} ms, "
+                  f"certificate {c['compiled_certificate_ms']:.3f} vs "
+                  f"{c['python_certificate_ms']:.3f} ms")  # fmt: skip
         for i, k in enumerate(entry["kernel_steps"]):
             print(f"  phase {i}: RK step with derivatives {k['fold_us']:.2f} µs, without "
                   f"{k['step_us']:.2f} µs")  # fmt: skip

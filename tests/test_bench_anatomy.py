@@ -44,3 +44,18 @@ def test_kernel_steps_name_each_phase_and_its_derivative_columns():
     for s in steps:
         assert s["derivative_columns"] == s["states"] + len(m.inputs) + len(m.p) + 1
         assert s["fold_us"] > 0 and s["step_us"] > 0
+
+
+def test_anatomy_without_the_compiled_newton_is_the_python_newton():
+    # Source: the solve's own record — without the compiled Newton every Newton iteration is
+    # one Jacobian evaluation from Python (LimitCycle.iterations of the same solve); the
+    # assembly's hook is put back afterwards.
+    from gaitopt.kernels.assemble import Assembly
+
+    before = Assembly.__dict__["compiled_newton"]
+    entry = anatomy.anatomy("compass_gait", 2, compiled=False)
+    assert Assembly.__dict__["compiled_newton"] is before
+    calls = entry["calls_per_solve"]
+    assert entry["success"] and entry["verified"]
+    assert calls["  compiled Newton (one call)"] == 0
+    assert calls["  Jacobian evaluations (F, ∂F/∂w)"] == entry["newton_iterations"]
