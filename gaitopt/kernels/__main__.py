@@ -1,11 +1,10 @@
 """``python -m gaitopt.kernels --warm [--jobs N] [MODEL ...]``: compile (or find in the cache) the
 shooting kernels (and their RK steps without derivatives; the compiled Newton's library), the
-verification's DOP853 steps, the
-certificate's checks, the compiled simulation's arc libraries, the batch simulation's driver and
-functions and, for a model with inputs, the optimiser's node kernels and flow Jacobians
-(:func:`gaitopt.optimize.collocation.warm_kernels`) of the built-in models, so that no later call
-waits for the compiler.  ``--jobs`` compiles that many models at once (default: the number of
-CPUs); the cache is safe for concurrent compiles."""
+verification's DOP853 steps, the certificate's checks, the compiled simulation's arc libraries,
+the batch simulation's driver and functions and, for a model with inputs, the optimiser's node
+kernels and flow Jacobians (:func:`gaitopt.optimize.collocation.warm_kernels`) of the built-in
+models, so that no later call waits for the compiler.  ``--jobs`` compiles that many models at
+once (default: the number of CPUs); the cache is safe for concurrent compiles."""
 
 from __future__ import annotations
 
