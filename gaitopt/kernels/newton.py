@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import ctypes
 import json
-import subprocess
 import sys
 import threading
 import weakref
@@ -51,9 +50,14 @@ def driver(verbose: bool = True) -> ctypes.CDLL | None:
     library = cache_dir() / f"gaitopt_newton_driver_{_key(SOURCE, cc, FLAGS_O2)}.so"
     try:
         if not library.exists():
-            _compile(SOURCE, cc, library, "gaitopt_newton_driver", verbose, FLAGS_O2)
+            import subprocess  # here: a warm start compiles nothing
+
+            try:
+                _compile(SOURCE, cc, library, "gaitopt_newton_driver", verbose, FLAGS_O2)
+            except subprocess.SubprocessError as exc:
+                raise OSError(str(exc)) from None
         lib = ctypes.CDLL(str(library))
-    except (OSError, subprocess.SubprocessError) as exc:
+    except OSError as exc:
         if verbose:
             print(f"gaitopt: could not compile the Newton driver ({exc}); Newton in Python",
                   file=sys.stderr)  # fmt: skip
