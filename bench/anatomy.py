@@ -2,13 +2,15 @@
 
 A warm :func:`gaitopt.find_limit_cycle` (the model at its defaults, default start, ``verify=True``,
 after one untimed call) is timed ``repeats`` times with each stage of the one sequence wrapped by
-a timer: the argument checks, the guess's simulation and its nodes, Newton (with the number and
-time of its Jacobian evaluations: the residual, the compiled kernels and the assembly, one CasADi
-call each), the discretisation-error estimate, the pre-check, the certificate (with the dense
-samples it reads), the multipliers, the referee's simulation and the result.  Each stage's CPU
-time (``time.process_time``: on a shared machine wall time includes waiting for a core) is the
-median over the repeats; ``other`` is the median total less the stages' medians (the Python
-between them).  The machine's load is recorded beside the numbers.
+a timer: the argument checks, the guess's simulation and its nodes, Newton (the one call of the
+compiled Newton, :mod:`gaitopt.kernels.newton`, which evaluates the Jacobians inside; or, where
+it does not run, the number and time of its Jacobian evaluations from Python: the residual, the
+compiled kernels and the assembly, one CasADi call each), the discretisation-error estimate, the
+pre-check, the certificate (with the dense samples it reads), the multipliers, the referee's
+simulation and the result.  Each stage's CPU time (``time.process_time``: on a shared machine
+wall time includes waiting for a core) is the median over the repeats; ``other`` is the median
+total less the stages' medians (the Python between them).  The machine's load is recorded beside
+the numbers.
 
 With Drake installed, the compass gait's warm verified solve is also set against Drake's
 ``CompassGait`` simulated from the same start until consecutive post-impact states agree to 1e-8
@@ -17,7 +19,9 @@ With Drake installed, the compass gait's warm verified solve is also set against
 rounds) in this process, each in CPU and wall time: the issue's goal of 20×, measured with both
 sides under the same load.
 
-Writes ``results/bench_anatomy.json`` (``--out``); ``--quick``: 5 repeats.
+``--compare`` also times each model without the compiled Newton (Newton in Python on the
+one-call CasADi assembly, the solve as before :mod:`gaitopt.kernels.newton`), in alternation
+with it.  Writes ``results/bench_anatomy.json`` (``--out``); ``--quick``: 5 repeats.
 """
 
 from __future__ import annotations
@@ -37,14 +41,15 @@ from typing import Any
 __all__ = ["STAGES", "anatomy", "main"]
 
 #: (label, module, attribute path) of each timed stage, in the order a solve runs them; labels
-#: starting with two spaces are parts of the stage above them (the Jacobian evaluations: the
-#: calls with ``jacobian=True``; the residual-only ones count in their stage, e.g. the error
-#: estimate's finer mesh).
+#: starting with two spaces are parts of the stage above them (the compiled Newton's one call,
+#: or the Jacobian evaluations from Python where it does not run: the calls with
+#: ``jacobian=True``; the residual-only ones count in their stage).
 STAGES = (
     ("arguments", "gaitopt.search", "check_arguments"),
     ("guess simulation", "gaitopt.shooting.gait", "simulate"),
     ("guess nodes", "gaitopt.shooting.problem", "ShootingProblem.unknowns_from_simulation"),
     ("Newton", "gaitopt.shooting.problem", "ShootingProblem.solve"),
+    ("  compiled Newton (one call)", "gaitopt.kernels.newton", "CompiledNewton.solve"),
     ("  Jacobian evaluations (F, ∂F/∂w)", "gaitopt.kernels.assemble", "Assembly.__call__"),
     ("error estimate", "gaitopt.shooting.transcription", "ShootingTranscription.error_estimate"),
     ("pre-check", "gaitopt.shooting.transcription", "ShootingTranscription.precheck"),
@@ -87,9 +92,28 @@ def _timed(spent: dict[str, float], calls: dict[str, int]) -> Iterator[None]:
             setattr(owner, name, original)
 
 
-def anatomy(name: str, repeats: int) -> dict[str, Any]:
+@contextlib.contextmanager
+def _without_compiled_newton() -> Iterator[None]:
+    """The solve as before the compiled Newton (:mod:`gaitopt.kernels.newton`): every shooting
+    system without it, so Newton runs in Python on the one-call CasADi assembly (put back on
+    exit)."""
+    from gaitopt.kernels.assemble import Assembly
+
+    original = Assembly.__dict__["compiled_newton"]
+    Assembly.compiled_newton = lambda self: None
+    try:
+        yield
+    finally:
+        Assembly.compiled_newton = original
+
+
+def anatomy(name: str, repeats: int, *, compiled: bool = True) -> dict[str, Any]:
     """The stages of ``repeats`` warm verified solves of model ``name`` (see the module
-    docstring): medians in ms, calls per solve, the total's median CPU and wall time."""
+    docstring): medians in ms, calls per solve, the total's median CPU and wall time; with
+    ``compiled=False`` as before the compiled Newton (:func:`_without_compiled_newton`)."""
+    if not compiled:
+        with _without_compiled_newton():
+            return anatomy(name, repeats)
     import gaitopt
 
     model = gaitopt.model(name)
@@ -103,6 +127,7 @@ def anatomy(name: str, repeats: int) -> dict[str, Any]:
             t0, c0 = time.perf_counter(), time.process_time()
             cycle = gaitopt.find_limit_cycle(model)
             cpu.append(time.process_time() - c0)
+            iterations = cycle.iterations
             wall.append(time.perf_counter() - t0)
             for label in per_stage:
                 per_stage[label].append(spent.get(label, 0.0))
@@ -118,7 +143,25 @@ def anatomy(name: str, repeats: int) -> dict[str, Any]:
         "wall_ms": 1e3 * statistics.median(wall),
         "stages_ms": {**stages, "other": total - top},
         "calls_per_solve": {label: calls.get(label, 0) / repeats for label in per_stage},
+        "newton_iterations": iterations,  # Jacobians evaluated (in the compiled call or not)
     }
+
+
+def compare(name: str, repeats: int, rounds: int = 3) -> dict[str, Any]:
+    """:func:`anatomy` with and without the compiled Newton in alternation (``rounds`` of each,
+    ``repeats`` solves per round): the medians of the rounds' medians (CPU ms), so both sides
+    see the same load."""
+    keys = {"cpu": None, "newton": "Newton", "error": "error estimate",
+            "multipliers": "multipliers", "certificate": "certificate"}  # fmt: skip
+    found: dict[str, list[float]] = {f"{side}_{k}_ms": [] for side in ("compiled", "python")
+                                     for k in keys}  # fmt: skip
+    for _ in range(rounds):
+        for side in ("compiled", "python"):
+            entry = anatomy(name, repeats, compiled=side == "compiled")
+            for k, label in keys.items():
+                value = entry["cpu_ms"] if label is None else entry["stages_ms"][label]
+                found[f"{side}_{k}_ms"].append(value)
+    return {"rounds": rounds, **{k: statistics.median(v) for k, v in found.items()}}
 
 
 def versus_drake(repeats: int) -> dict[str, Any] | None:
@@ -216,6 +259,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--models", nargs="+", default=["compass_gait", "kneed_walker"])
     parser.add_argument("--repeats", type=int, default=60)
     parser.add_argument("--quick", action="store_true", help="5 repeats")
+    parser.add_argument("--compare", action="store_true",
+                        help="also without the compiled Newton (Newton in Python, as before "
+                        "it), in alternation with it: three rounds of each")  # fmt: skip
     parser.add_argument("--out", type=Path, default=Path("results/bench_anatomy.json"))
     args = parser.parse_args(argv)
     if args.repeats < 1:
@@ -226,10 +272,22 @@ def main(argv: list[str] | None = None) -> int:
         entry = record["models"][name] = anatomy(name, repeats)
         entry["kernel_steps"] = kernel_steps(name)
         print(f"{name}: CPU {entry['cpu_ms']:.2f} ms median (min {entry['cpu_min_ms']:.2f}), "
-              f"wall {entry['wall_ms']:.2f} ms")  # fmt: skip
+              f"wall {entry['wall_ms']:.2f} ms, {entry['newton_iterations']} Newton "
+              f"iterations")  # fmt: skip
         for label, ms in entry["stages_ms"].items():
             n = entry["calls_per_solve"].get(label)
             print(f"  {label:34s} {ms:7.3f} ms" + (f"  ×{n:g}" if n else ""))
+        if args.compare:
+            entry["compare"] = compare(name, repeats)
+            c = entry["compare"]
+            print(f"  compiled Newton vs Newton in Python (medians of {c['rounds']} alternating "
+                  f"rounds): whole solve {c['compiled_cpu_ms']:.2f} vs "
+                  f"{c['python_cpu_ms']:.2f} ms, Newton {c['compiled_newton_ms']:.3f} vs "
+                  f"{c['python_newton_ms']:.3f} ms, error estimate "
+                  f"{c['compiled_error_ms']:.3f} vs {c['python_error_ms']:.3f} ms, multipliers "
+                  f"{c['compiled_multipliers_ms']:.3f} vs {c['python_multipliers_ms']:.3f} ms, "
+                  f"certificate {c['compiled_certificate_ms']:.3f} vs "
+                  f"{c['python_certificate_ms']:.3f} ms")  # fmt: skip
         for i, k in enumerate(entry["kernel_steps"]):
             print(f"  phase {i}: RK step with derivatives {k['fold_us']:.2f} µs, without "
                   f"{k['step_us']:.2f} µs")  # fmt: skip

@@ -8,20 +8,26 @@ from bench import anatomy
 
 
 def test_anatomy_counts_the_stages_and_restores_them():
-    # Source: the solve's own record — one Jacobian evaluation per Newton iteration (the
-    # compass gait at its defaults needs no mesh refinement, so all of them are the one
-    # solve's: LimitCycle.iterations); one call of every other stage per solve.  Times are not
-    # asserted (no timing assertions), only that they are recorded and non-negative.
+    # Source: the solve's own record — the compass gait at its defaults needs no mesh
+    # refinement, so its Newton iterations (LimitCycle.iterations, one Jacobian each) are the
+    # one solve's: inside one call of the compiled Newton where there is a C compiler, else one
+    # Jacobian evaluation from Python per iteration; one call of every other stage per solve.
+    # Times are not asserted (no timing assertions), only that they are recorded and
+    # non-negative.
     import gaitopt.kernels.assemble as assemble
     import gaitopt.orbit.solve as orbit_solve
+    from gaitopt.kernels.newton import driver
 
     before = (assemble.Assembly.__call__, orbit_solve.certificate)
     entry = anatomy.anatomy("compass_gait", 2)
     assert (assemble.Assembly.__call__, orbit_solve.certificate) == before  # put back
     cycle = gaitopt.find_limit_cycle(gaitopt.model("compass_gait"))
     assert entry["success"] and entry["verified"] and entry["repeats"] == 2
+    assert entry["newton_iterations"] == cycle.iterations
     calls = entry["calls_per_solve"]
-    assert calls["  Jacobian evaluations (F, ∂F/∂w)"] == cycle.iterations
+    compiled = driver() is not None
+    assert calls["  compiled Newton (one call)"] == (1 if compiled else 0)
+    assert calls["  Jacobian evaluations (F, ∂F/∂w)"] == (0 if compiled else cycle.iterations)
     for label in ("arguments", "guess simulation", "Newton", "certificate", "referee", "result"):
         assert calls[label] == 1, label
     assert all(v >= 0 for k, v in entry["stages_ms"].items() if k != "other")
@@ -38,3 +44,18 @@ def test_kernel_steps_name_each_phase_and_its_derivative_columns():
     for s in steps:
         assert s["derivative_columns"] == s["states"] + len(m.inputs) + len(m.p) + 1
         assert s["fold_us"] > 0 and s["step_us"] > 0
+
+
+def test_anatomy_without_the_compiled_newton_is_the_python_newton():
+    # Source: the solve's own record — without the compiled Newton every Newton iteration is
+    # one Jacobian evaluation from Python (LimitCycle.iterations of the same solve); the
+    # assembly's hook is put back afterwards.
+    from gaitopt.kernels.assemble import Assembly
+
+    before = Assembly.__dict__["compiled_newton"]
+    entry = anatomy.anatomy("compass_gait", 2, compiled=False)
+    assert Assembly.__dict__["compiled_newton"] is before
+    calls = entry["calls_per_solve"]
+    assert entry["success"] and entry["verified"]
+    assert calls["  compiled Newton (one call)"] == 0
+    assert calls["  Jacobian evaluations (F, ∂F/∂w)"] == entry["newton_iterations"]

@@ -1,10 +1,10 @@
 """``python -m gaitopt.kernels --warm [--jobs N] [MODEL ...]``: compile (or find in the cache) the
-shooting kernels (and their RK steps without derivatives), the verification's DOP853 steps, the
-certificate's checks, the compiled simulation's arc libraries, the batch simulation's driver and
-functions and, for a model with inputs, the optimiser's node kernels and flow Jacobians
-(:func:`gaitopt.optimize.collocation.warm_kernels`) of the built-in models, so that no later call
-waits for the compiler.  ``--jobs`` compiles that many models at once (default: the number of
-CPUs); the cache is safe for concurrent compiles."""
+shooting kernels (and their RK steps without derivatives; the compiled Newton's library), the
+verification's DOP853 steps, the certificate's checks, the compiled simulation's arc libraries,
+the batch simulation's driver and functions and, for a model with inputs, the optimiser's node
+kernels and flow Jacobians (:func:`gaitopt.optimize.collocation.warm_kernels`) of the built-in
+models, so that no later call waits for the compiler.  ``--jobs`` compiles that many models at
+once (default: the number of CPUs); the cache is safe for concurrent compiles."""
 
 from __future__ import annotations
 
@@ -34,6 +34,9 @@ def _warm(name: str) -> tuple[str, str, float, float]:
     kern = model_kernels(REGISTRY[name])
     if kern is not None:
         step_kernels(REGISTRY[name])  # the RK steps without derivatives (residual alone)
+        from .newton import driver
+
+        driver()  # the compiled Newton (one library for every model and mesh)
     verification_steps(REGISTRY[name])  # the verification's DOP853 steps
     from .checks import check_kernels
 

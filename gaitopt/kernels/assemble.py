@@ -5,36 +5,25 @@ phase of the chain, the gaps between segments, the guard at the phase end, the r
 the next phase; then periodicity ``P − s``.  Each segment end ``x_e = Φ(x_start, u, p, T/S)``
 contributes its block ``∂Φ/∂[x_start; u; p; hs]`` (``hs = T/S``, so ``∂/∂T = ∂/∂hs / S``); the
 first segment start of the chain is ``lift(s, p)``, contributing ``∂lift/∂s`` and ``∂lift/∂p``.
+
+An :class:`Assembly` is evaluated in one C call of the compiled Newton's library where there is
+one (:mod:`gaitopt.kernels.newton`: these blocks, the kernels called by address), else as one
+CasADi MX function (:meth:`Assembly._assembled`), else block by block in NumPy
+(:meth:`Assembly._assemble`, the reference the other two are tested against).
 """
 
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from ..fastcall import call
 from . import model_kernels, phase_function, phase_residual_function
+from .evaluation import Evaluation
 
 __all__ = ["Evaluation", "Assembly"]
-
-
-@dataclass
-class Evaluation:
-    """The shooting equations at one point: ``F`` and (with ``jacobian``) ``∂F/∂w``, ``∂F/∂u``,
-    ``∂F/∂p``; the return state, each phase's end state, guard rate, admissibility, duration."""
-
-    F: np.ndarray
-    F_w: np.ndarray | None
-    F_u: np.ndarray | None
-    F_p: np.ndarray | None
-    x_return: np.ndarray
-    ends: list[np.ndarray]
-    rates: np.ndarray
-    admissible: np.ndarray
-    durations: np.ndarray
 
 
 class Assembly:
@@ -66,6 +55,15 @@ class Assembly:
         self._residual: tuple[ca.Function, list] | None = None
         self._buffers = threading.local()
 
+    def compiled_newton(self):
+        """The compiled Newton on this system (:class:`gaitopt.kernels.newton.CompiledNewton`),
+        built on first use, or None where it cannot be (no compiler, kernels not compiled)."""
+        if "_compiled_newton" not in self.__dict__:
+            from .newton import CompiledNewton
+
+            self.__dict__["_compiled_newton"] = CompiledNewton.build(self)
+        return self.__dict__["_compiled_newton"]
+
     def _chain(self, phase: dict) -> tuple[ca.Function, list]:
         """The chain's function of ``phase`` (per phase index, a :func:`phase_function` or
         :func:`phase_residual_function`) and its outputs' shapes."""
@@ -94,7 +92,7 @@ class Assembly:
 
     def __getstate__(self) -> dict:
         # Buffers are per thread; the assembled functions are rebuilt where they are used.
-        skip = ("_buffers", "_assembled_jac", "_assembled_res")
+        skip = ("_buffers", "_assembled_jac", "_assembled_res", "_compiled_newton")
         return {k: v for k, v in self.__dict__.items() if k not in skip}
 
     def __setstate__(self, state: dict) -> None:
@@ -144,6 +142,12 @@ class Assembly:
         u = np.asarray(u, dtype=float).ravel()
         p = np.asarray(p, dtype=float).ravel()
         if w.size == self.size and u.size == self.n_u and p.size == self.n_p and self.size:
+            compiled = self.compiled_newton()
+            if compiled is not None:  # the same blocks in one C call (kernels/newton.py)
+                try:
+                    return compiled.evaluate(w, u, p, jacobian=jacobian)
+                except RuntimeError:  # a kernel failed: the CasADi evaluation says how
+                    pass
             f = self._assembled(jacobian)
             if f is not None:
                 return self._read(f, w, u, p, jacobian)

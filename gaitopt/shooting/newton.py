@@ -18,7 +18,7 @@ from ..orbit.newton import newton as _orbit_newton
 from .pattern import pattern_of
 from .symbolic import NEWTON_OPTIONS
 
-__all__ = ["METHODS", "Solution", "newton", "solve"]
+__all__ = ["METHODS", "Solution", "compiled_or_python", "newton", "solve"]
 
 
 class ShootingSystem(Protocol):
@@ -68,7 +68,7 @@ def solve(problem: ShootingSystem, w0, u, p, *, method="newton", objective=None,
                 "`objective`/`free_inputs` need method='ipopt': Newton solves the square system"
             )
         if problem.assembly() is not None:
-            w, converged, iterations, ev = newton(problem, w0, u, p)
+            w, converged, iterations, ev = compiled_or_python(problem, w0, u, p)
             if not converged:
                 w, converged, more, ev = newton(problem, w0, u, p, line_search=True)
                 iterations += more
@@ -118,6 +118,33 @@ def newton(problem: ShootingSystem, w0, u, p, *, line_search: bool = False):
         residual=lambda w: asm(w, u, p, jacobian=False),
         linear_solve=None if pattern is None else lambda J, F: structured.solve(J, F, pattern),
     )  # fmt: skip
+
+
+def compiled_or_python(problem: ShootingSystem, w0, u, p):
+    """Plain Newton (:func:`newton` without line search) in one compiled call
+    (:mod:`gaitopt.kernels.newton`) where the system has one and is solved densely (below
+    :data:`gaitopt.orbit.structured.STRUCTURED_MIN_SIZE` unknowns), else in Python.  The same
+    stopping tests; where the compiled call meets an exactly singular ``∂F/∂w`` (the Python
+    Newton's least-squares step) or a kernel fails, the Python Newton runs from ``w0``.
+
+    Returns
+    -------
+    (w, converged, iterations, evaluation) : as :func:`newton`; a converged compiled solve's
+    evaluation carries the return map's Jacobians (``evaluation.return_map``).
+    """
+    compiled = None
+    if problem.size < structured.STRUCTURED_MIN_SIZE:
+        compiled = problem.assembly().compiled_newton()
+    if compiled is not None:
+        code, w, iterations, ev = compiled.solve(
+            w0, u, p, max_iter=NEWTON_OPTIONS["max_iter"], abstol=NEWTON_OPTIONS["abstol"],
+            abstol_step=NEWTON_OPTIONS["abstolStep"],
+        )  # fmt: skip
+        if ev is not None:  # converged, or stopped as the Python Newton stops
+            from ..kernels.newton import CONVERGED
+
+            return w, code in CONVERGED, iterations, ev
+    return newton(problem, w0, u, p)
 
 
 def _newton(solver: ca.Function, w0, u, p) -> tuple[np.ndarray, bool, int]:

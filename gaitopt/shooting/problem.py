@@ -192,8 +192,14 @@ class ShootingProblem(SymbolicShooting):
         return out
 
     def sample_numeric(self, w, u, p) -> list[np.ndarray]:
-        """Dense samples of every phase (n × S·(dense + 1)), without the whole graph."""
+        """Dense samples of every phase (n × S·(dense + 1)), without the whole graph: in one
+        call of the compiled Newton's library where the system has it
+        (:meth:`gaitopt.kernels.newton.CompiledNewton.samples`, the same step kernels)."""
         S, q = self.disc.segments, self.disc.dense
+        asm = self.assembly()
+        compiled = asm.compiled_newton() if asm is not None else None
+        if compiled is not None:
+            return compiled.samples(w, u, p, q)
         starts = self.segment_starts(w, p)
         durations = [w[off] for kind, _, off, _ in self.layout if kind == "duration"]
         if self.assembly() is not None:  # the compiled RK step (gaitopt.kernels)
@@ -318,6 +324,17 @@ class ShootingProblem(SymbolicShooting):
         """``∂[G; P]/∂w`` from ``∂F/∂w`` (``F = [G; P − s]``): the blocks of the return map's
         Jacobian (:func:`gaitopt.orbit.sensitivity.section_jacobians`)."""
         return map_blocks(F_w, self.m, self.n_g)
+
+    def correction(self, F_w, w, u, p) -> np.ndarray:
+        """``−(∂F/∂w)⁻¹ F_fine(w)``: one Newton correction from ``w`` towards the mesh with twice
+        the RK steps per segment (:meth:`fine_residual`), in one compiled call where the system
+        has the compiled Newton (:mod:`gaitopt.kernels.newton`), else by :meth:`newton_step`;
+        raises ``LinAlgError`` where ``F_w`` is singular."""
+        asm = self.assembly()
+        compiled = asm.compiled_newton() if asm is not None else None
+        if compiled is not None:
+            return compiled.correction(F_w, w, u, p, 2 * self.disc.rk_steps)
+        return self.newton_step(F_w, self.fine_residual(w, u, p))
 
     def newton_step(self, F_w, F) -> np.ndarray:
         """``−(∂F/∂w)⁻¹ F``: one Newton correction (raises ``LinAlgError`` where singular)."""

@@ -160,6 +160,8 @@ class ShootingTranscription:
         ``numpy.linalg.LinAlgError`` where the equations are singular."""
         ev = self._evaluation(w)
         pr = self.problem
+        if self.linearisation is None and getattr(ev, "return_map", None) is not None:
+            return ReturnMap(*ev.return_map)  # the compiled Newton's, from the same Jacobian
         if self.linearisation is not None:
             J_w, J_u = (np.asarray(v, dtype=float) for v in self.linearisation[:2])
         else:
@@ -201,7 +203,7 @@ class ShootingTranscription:
         key = np.asarray(w, dtype=float).ravel().tobytes()
         if self._correction is None or self._correction[0] != key:
             ev = self._evaluation(w)
-            step = self.problem.newton_step(ev.F_w, self.problem.fine_residual(w, self._u, self.p))
+            step = self.problem.correction(ev.F_w, w, self._u, self.p)
             self._correction = (key, step)
         return self._correction[1]
 
