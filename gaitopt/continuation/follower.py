@@ -24,6 +24,9 @@ _MAX_MESH_REFINEMENTS = 4
 #: Relative size of a corrector step below which the next step is a chord step (the last
 #: Jacobian kept, only the residual evaluated): the Jacobian then moves by about this much.
 CHORD_STEP = 1e-5
+#: An error estimate at most this many times the step of the residual alone is at the residual's
+#: rounding floor (:meth:`Follower._try_coarser`).
+NOISE_FLOOR = 10.0
 
 
 class Follower(SpecialPoints):
@@ -55,6 +58,7 @@ class Follower(SpecialPoints):
         disc = first.discretisation or MultipleShooting(*type(model).mesh)
         self.problem: ShootingProblem = shooting_problem(type(model), disc, first.steps)
         self.refinements = 0
+        self._coarsen_wait, self._coarsen_backoff = 0, 1  # see _try_coarser
         self._last_evaluation = None
         self.cycles: list[LimitCycle] = [first]
         self.special_points: list[SpecialPoint] = []
@@ -181,7 +185,7 @@ class Follower(SpecialPoints):
 
         The mesh follows the discretisation error: refined (steps doubled) while the estimate
         exceeds ``tol``, coarsened again where half the steps would still meet it (the error
-        scales as h⁸)."""
+        scales as h⁸; :meth:`_try_coarser`), level by level while it does."""
         model = self.model_at(y)
         if model is None:
             return None, y
@@ -195,7 +199,7 @@ class Follower(SpecialPoints):
             if not ok:
                 return None, y
             error = self._discretisation_error(y)
-        if self.problem.disc.rk_steps > type(model).mesh[1] and error < self.tol / 1000:
+        while self.problem.disc.rk_steps > type(model).mesh[1] and self._try_coarser(y, error):
             coarse = shooting_problem(
                 type(model), self.problem.disc.coarsened(), self.problem.cycles
             )
@@ -206,8 +210,12 @@ class Follower(SpecialPoints):
             if coarse_error <= self.tol:
                 y, error = y_coarse, coarse_error
                 self.refinements = max(self.refinements - 1, 0)
+                self._coarsen_backoff = 1
             else:
                 self.problem = previous
+                self._coarsen_wait = self._coarsen_backoff
+                self._coarsen_backoff *= 2
+                break
         cycle = certify(
             model,
             self.problem,
@@ -219,6 +227,24 @@ class Follower(SpecialPoints):
             evaluation=self._evaluate(y),
         )
         return cycle, y
+
+    def _try_coarser(self, y: np.ndarray, error: float) -> bool:
+        """Whether to try the mesh with half the RK steps at ``y`` (its error estimate
+        ``error``): where the estimate is below ``tol / 1000`` (the coarser mesh's error, about
+        2⁸ times larger, then meets ``tol``); or where it is below ``tol / 10`` but no larger than
+        :data:`NOISE_FLOOR` times the step the residual left at ``y`` alone would take (``|F_w⁻¹
+        F(y)|``): then the estimate measures that residual, at its rounding floor, and not the
+        mesh (a period-8 orbit on a refined mesh: ~1e-12 either way), so only trying says whether
+        the coarser mesh meets ``tol``.  After a failed try of the second kind the next points
+        skip it, for twice as many points after each further failure."""
+        if error < self.tol / 1000:
+            return True
+        if error >= self.tol / 10 or self._coarsen_wait > 0:
+            self._coarsen_wait = max(self._coarsen_wait - 1, 0)
+            return False
+        ev = self._evaluate(y)
+        leftover = structured.solve(ev.F_w, ev.F, pattern_of(self.problem))
+        return bool(error <= NOISE_FLOOR * np.max(np.abs(leftover)))
 
     def _unit_lambda(self) -> np.ndarray:
         t = np.zeros(self.problem.size + 1)
