@@ -55,6 +55,8 @@ class Follower(SpecialPoints):
                 down = model.replace(**{param: lam0 - h}).nominal_input()
                 self.du = (nominal - down) / h
         self.lam0 = float(getattr(model, param))
+        # The base class's nominal input (u = 0) depends on no parameter: no model to build.
+        self.nominal_varies = type(model).nominal_input is not HybridModel.nominal_input
         disc = first.discretisation or MultipleShooting(*type(model).mesh)
         self.problem: ShootingProblem = shooting_problem(type(model), disc, first.steps)
         self.refinements = 0
@@ -79,7 +81,7 @@ class Follower(SpecialPoints):
         only to ~1e-10, and a gait whose input differs from its model's nominal one by that much
         is no longer recognised as nominal downstream, e.g. by the switch at a PD)."""
         lam = self.lam(y)
-        if self.nominal and lam != self.lam0:
+        if self.nominal and lam != self.lam0 and self.nominal_varies:
             try:
                 return self.model0.replace(**{self.param: lam}).nominal_input()
             except ParameterError:  # a predictor or corrector iterate outside the range
