@@ -6,16 +6,21 @@ A branch is followed in ``y = (w, ℓ)``: the shooting unknowns ``w`` of
 the tangent ``t`` (the null vector of ``[F_w, F_ℓ]``) and corrects with Newton on
 ``F(w, ℓ) = 0, ⟨t, y − y_pred⟩ = 0`` (Keller's pseudo-arclength method; Allgower & Georg,
 "Numerical Continuation Methods", §2.1); the inner product weights the ``N`` shooting unknowns by
-``1/N`` so that states and parameter count alike.  The step adapts to the corrector's work.  Every
-accepted point is certified like a solved gait (:func:`gaitopt.shooting.certify`: no false
-gaits, multipliers, independent simulation) and its discretisation error estimated (the mesh is
-refined along the branch when needed).
+``1/N`` so that states and parameter count alike.  Once a corrector step is below 1e-5 (relative)
+the next one is a chord step (the last Jacobian kept, only the residual evaluated); where the
+corrector may stop, the full evaluation is made, so the accepted point has its own Jacobian.  The
+step adapts to the corrector's work.  Every accepted point is certified like a solved gait
+(:func:`gaitopt.shooting.certify`: no false gaits, multipliers, independent simulation) and its
+discretisation error estimated (the mesh is refined along the branch when needed, and coarsened
+again where the coarser mesh meets the tolerance).
 
 Special points come from test functions of the return map's Jacobian ``A`` (Kuznetsov,
 "Elements of Applied Bifurcation Theory", §10.2, maps): fold ``LP`` where ``det(A − I)`` changes
 sign (a multiplier +1), period doubling ``PD`` where ``det(A + I)`` does (−1), Neimark–Sacker
 ``NS`` where the bialternate product ``∏_{i<j}(μ_i μ_j − 1)`` does with a complex pair on the unit
-circle.  Each is located by regula falsi (Illinois) along the arclength to 1e-10 in the parameter.
+circle.  Each is located by regula falsi (Illinois) along the arclength to 1e-10 in the parameter
+(a fold or a PD on the crossing multiplier itself, ``μ ∓ 1``, which has the same zero and is nearly
+linear), every corrector starting from the branch interpolated through the points already found.
 A ``boundary`` is where the gait stops existing: a certification check fails (a guard grazes, a
 duration reaches zero, a guard is crossed early, the simulation disagrees) or the corrector cannot
 continue; it is located by bisection.  At a PD the period-2 orbit is found (perturbing along the
