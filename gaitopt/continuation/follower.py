@@ -21,9 +21,6 @@ from .special import SpecialPoints, test_functions
 __all__ = ["Follower"]
 
 _MAX_MESH_REFINEMENTS = 4
-#: Relative size of a corrector step below which the next step is a chord step (the last
-#: Jacobian kept, only the residual evaluated): the Jacobian then moves by about this much.
-CHORD_STEP = 1e-5
 #: An error estimate at most this many times the step of the residual alone is at the residual's
 #: rounding floor (:meth:`Follower._try_coarser`).
 NOISE_FLOOR = 10.0
@@ -123,42 +120,21 @@ class Follower(SpecialPoints):
         self, y_pred: np.ndarray, t: np.ndarray, start: np.ndarray | None = None
     ) -> tuple[np.ndarray, bool, int]:
         """Newton on ``F(y) = 0, ⟨t, y − y_pred⟩_W = 0`` from ``start`` (default ``y_pred``);
-        converged when ``|F| ≤ tol`` after a step below 1e-9 (relative).
-
-        Once a step is below :data:`CHORD_STEP` (relative) the next iterate's Jacobian is not
-        evaluated: the step out of it reuses the last one (a chord step; Deuflhard, "Newton
-        Methods for Nonlinear Problems", §2.1.4: its contraction is of the order of that step,
-        so convergence stays as fast as Newton's to rounding) and only the residual is computed
-        there (a fifth of the work).  Wherever the corrector may stop, after a step below 1e-9,
-        the full evaluation is made, so the accepted point has its own Jacobian (the tangent,
-        multipliers, error estimate and certificate use it) and the same iterations as before.
-        """
+        converged when ``|F| ≤ tol`` after a step below 1e-9 (relative)."""
         y = (y_pred if start is None else start).copy()
-        tW = t * self.weights(y)
+        W = self.weights(y)
         F, J = self.jacobian(y)
         for k in range(1, self.options.max_corrector + 1):
             if not np.all(np.isfinite(F)):
                 return y, False, k
-            G = np.concatenate([F, [float(tW @ (y - y_pred))]])
-            dy = self._solve_bordered(np.vstack([J, tW]), -G)
+            G = np.concatenate([F, [float(t @ (W * (y - y_pred)))]])
+            dy = self._solve_bordered(np.vstack([J, t * W]), -G)
             y = y + dy
-            step = np.max(np.abs(dy)) / (1 + np.max(np.abs(y)))
-            small = step < 1e-9
-            if small or step >= CHORD_STEP or k == self.options.max_corrector:
-                F, J = self.jacobian(y)
-            else:
-                F = self._residual(y)
+            F, J = self.jacobian(y)
+            small = np.max(np.abs(dy)) < 1e-9 * (1 + np.max(np.abs(y)))
             if small and np.max(np.abs(F)) <= self.tol:
                 return y, True, k
         return y, False, self.options.max_corrector
-
-    def _residual(self, y: np.ndarray) -> np.ndarray:
-        """``F(y)`` alone (no Jacobian: :meth:`ShootingProblem.evaluate` with
-        ``jacobian=False``), or from the kept evaluation at ``y``."""
-        key = (id(self.problem), y.tobytes())
-        if self._last_evaluation is not None and self._last_evaluation[0] == key:
-            return self._last_evaluation[1].F
-        return self.problem.evaluate(y[:-1], self._u(y), self._p(y), jacobian=False).F
 
     def _solve_bordered(self, K: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         """``K⁻¹ rhs`` for ``K = [[F_w, F_ℓ], [rowᵀ]]``: on the shooting Jacobian's block
@@ -201,7 +177,10 @@ class Follower(SpecialPoints):
             if not ok:
                 return None, y
             error = self._discretisation_error(y)
-        while self.problem.disc.rk_steps > type(model).mesh[1] and self._try_coarser(y, error):
+        again = False
+        while self.problem.disc.rk_steps > type(model).mesh[1] and self._try_coarser(
+            y, error, again
+        ):
             coarse = shooting_problem(
                 type(model), self.problem.disc.coarsened(), self.problem.cycles
             )
@@ -212,7 +191,7 @@ class Follower(SpecialPoints):
             if coarse_error <= self.tol:
                 y, error = y_coarse, coarse_error
                 self.refinements = max(self.refinements - 1, 0)
-                self._coarsen_backoff = 1
+                self._coarsen_backoff, again = 1, True
             else:
                 self.problem = previous
                 self._coarsen_wait = self._coarsen_backoff
@@ -230,7 +209,7 @@ class Follower(SpecialPoints):
         )
         return cycle, y
 
-    def _try_coarser(self, y: np.ndarray, error: float) -> bool:
+    def _try_coarser(self, y: np.ndarray, error: float, again: bool = False) -> bool:
         """Whether to try the mesh with half the RK steps at ``y`` (its error estimate
         ``error``): where the estimate is below ``tol / 1000`` (the coarser mesh's error, about
         2⁸ times larger, then meets ``tol``); or where it is below ``tol / 10`` but no larger than
@@ -238,8 +217,10 @@ class Follower(SpecialPoints):
         F(y)|``): then the estimate measures that residual, at its rounding floor, and not the
         mesh (a period-8 orbit on a refined mesh: ~1e-12 either way), so only trying says whether
         the coarser mesh meets ``tol``.  After a failed try of the second kind the next points
-        skip it, for twice as many points after each further failure."""
-        if error < self.tol / 1000:
+        skip it, for twice as many points after each further failure.  ``again``: a coarser mesh
+        was just taken at this point; only the second kind goes on down (one level per point by
+        the first, as the error's h⁸ scaling has it)."""
+        if error < self.tol / 1000 and not again:
             return True
         if error >= self.tol / 10 or self._coarsen_wait > 0:
             self._coarsen_wait = max(self._coarsen_wait - 1, 0)
