@@ -16,9 +16,7 @@ Special points come from test functions of the return map's Jacobian ``A`` (Kuzn
 "Elements of Applied Bifurcation Theory", §10.2, maps): fold ``LP`` where ``det(A − I)`` changes
 sign (a multiplier +1), period doubling ``PD`` where ``det(A + I)`` does (−1), Neimark–Sacker
 ``NS`` where the bialternate product ``∏_{i<j}(μ_i μ_j − 1)`` does with a complex pair on the unit
-circle.  Each is located by regula falsi (Illinois) along the arclength to 1e-10 in the parameter
-(a fold or a PD on the crossing multiplier itself, ``μ ∓ 1``, which has the same zero and is nearly
-linear), every corrector starting from the branch interpolated through the points already found.
+circle.  Each is located by regula falsi (Illinois) along the arclength to 1e-10 in the parameter.
 A ``boundary`` is where the gait stops existing: a certification check fails (a guard grazes, a
 duration reaches zero, a guard is crossed early, the simulation disagrees) or the corrector cannot
 continue; it is located by bisection.  At a PD the period-2 orbit is found (perturbing along the

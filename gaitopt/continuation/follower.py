@@ -58,6 +58,7 @@ class Follower(SpecialPoints):
         self.problem: ShootingProblem = shooting_problem(type(model), disc, first.steps)
         self.refinements = 0
         self._coarsen_wait, self._coarsen_backoff = 0, 1  # see _try_coarser
+        self._refined_here = False
         self._last_evaluation = None
         self.cycles: list[LimitCycle] = [first]
         self.special_points: list[SpecialPoint] = []
@@ -116,12 +117,10 @@ class Follower(SpecialPoints):
         t /= math.sqrt(float(t @ (W * t)))
         return t if float(t @ (W * previous)) > 0 else -t
 
-    def correct(
-        self, y_pred: np.ndarray, t: np.ndarray, start: np.ndarray | None = None
-    ) -> tuple[np.ndarray, bool, int]:
-        """Newton on ``F(y) = 0, ⟨t, y − y_pred⟩_W = 0`` from ``start`` (default ``y_pred``);
-        converged when ``|F| ≤ tol`` after a step below 1e-9 (relative)."""
-        y = (y_pred if start is None else start).copy()
+    def correct(self, y_pred: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, bool, int]:
+        """Newton on ``F(y) = 0, ⟨t, y − y_pred⟩_W = 0``; converged when ``|F| ≤ tol`` after a
+        step below 1e-9 (relative)."""
+        y = y_pred.copy()
         W = self.weights(y)
         F, J = self.jacobian(y)
         for k in range(1, self.options.max_corrector + 1):
@@ -173,6 +172,7 @@ class Follower(SpecialPoints):
                 type(model), self.problem.disc.refined(), self.problem.cycles
             )
             self.refinements += 1
+            self._refined_here = True
             y, ok, _ = self.correct(y, self._unit_lambda())
             if not ok:
                 return None, y
@@ -216,13 +216,15 @@ class Follower(SpecialPoints):
         :data:`NOISE_FLOOR` times the step the residual left at ``y`` alone would take (``|F_w⁻¹
         F(y)|``): then the estimate measures that residual, at its rounding floor, and not the
         mesh (a period-8 orbit on a refined mesh: ~1e-12 either way), so only trying says whether
-        the coarser mesh meets ``tol``.  After a failed try of the second kind the next points
-        skip it, for twice as many points after each further failure.  ``again``: a coarser mesh
+        the coarser mesh meets ``tol``.  The second kind only for a mesh the branch started on
+        (its first gait's, e.g. chosen by the switch's solve next to a PD), never once the branch
+        has refined its mesh itself.  After a failed try of the second kind the next points skip
+        it, for twice as many points after each further failure.  ``again``: a coarser mesh
         was just taken at this point; only the second kind goes on down (one level per point by
         the first, as the error's h⁸ scaling has it)."""
         if error < self.tol / 1000 and not again:
             return True
-        if error >= self.tol / 10 or self._coarsen_wait > 0:
+        if error >= self.tol / 10 or self._coarsen_wait > 0 or self._refined_here:
             self._coarsen_wait = max(self._coarsen_wait - 1, 0)
             return False
         ev = self._evaluate(y)

@@ -12,7 +12,7 @@ from ..shooting import certify
 from .branch import SpecialPoint
 
 __all__ = [
-    "LOCATE_TOL", "Known", "SpecialPoints", "bisect_boundary", "regula_falsi", "test_functions",
+    "LOCATE_TOL", "SpecialPoints", "bisect_boundary", "regula_falsi", "test_functions",
 ]  # fmt: skip
 
 #: Parameter accuracy of located special points (absolute).
@@ -35,31 +35,21 @@ class SpecialPoints:
             a, b = tests[kind], new_tests[kind]
             if a == 0 or b == 0 or np.sign(a) == np.sign(b):
                 continue
-            f = _locating_function(kind, self.cycles[-1].multipliers, cycle.multipliers)
-            a, b = (a, b) if f is None else (f(self.cycles[-1].multipliers), f(cycle.multipliers))
-            located = self._locate(y, t, h_total, kind, a, b, y_new, f)
+            located = self._locate(y, t, h_total, kind, a, b)
             if located is not None:
                 found.append(located)
         for sp in sorted(found, key=lambda s: (s.param - self.lam(y)) * self.direction):
             self.special_points.append(sp)
 
-    def _locate(self, y, t, h_b, kind, psi_a, psi_b, y_b=None, f=None) -> SpecialPoint | None:
+    def _locate(self, y, t, h_b, kind, psi_a, psi_b) -> SpecialPoint | None:
         """Illinois regula falsi on the arclength for the test function's zero, until the
-        bracket is below 1e-10 in the parameter and 1e-9 in the arclength.  Each corrector
-        starts from the branch interpolated through the nearest points already corrected
-        (:class:`Known`; ``y_b`` the point at ``h_b``), not from the tangent at ``y``: the same
-        point on the arclength's hyperplane, in fewer Newton steps.  ``f`` (multipliers → value)
-        replaces the test function where :func:`_locating_function` gives one (``psi_a``,
-        ``psi_b`` then its values at the ends)."""
-        value = (lambda mu: test_functions(mu)[kind]) if f is None else f
-        known = Known(y, h_b, y_b)
+        bracket is below 1e-10 in the parameter and 1e-9 in the arclength."""
 
         def evaluate(h):
-            y_mid, ok, _ = self.correct(y + h * t, t, known.near(h))
+            y_mid, ok, _ = self.correct(y + h * t, t)
             if not ok:
                 return None
-            known.add(h, y_mid)
-            return value(self.multipliers_at(y_mid)), self.lam(y_mid), y_mid
+            return test_functions(self.multipliers_at(y_mid))[kind], self.lam(y_mid), y_mid
 
         # Both brackets: near a fold λ is quadratic in the arclength, so a tight λ alone would
         # leave the point (and its multiplier +1) loose.
@@ -122,34 +112,6 @@ class SpecialPoints:
         self.stop = f"boundary at {self.param} = {lam:.10g}"
 
 
-class Known:
-    """Points of a branch already corrected at arclengths ``h`` along one predictor line, and
-    the start they give a corrector at another ``h``: the quadratic (Lagrange) through the three
-    nearest (fewer while fewer are known), whose error shrinks with the cube of their spacing as a
-    bracket closes in (the corrector then converges in one or two steps)."""
-
-    def __init__(self, y: np.ndarray, h_b: float | None = None, y_b: np.ndarray | None = None):
-        self.h, self.y = [0.0], [y]
-        if h_b is not None and y_b is not None and y_b.shape == y.shape:
-            self.add(h_b, y_b)
-
-    def add(self, h: float, y: np.ndarray) -> None:
-        if y.shape == self.y[0].shape:
-            self.h.append(float(h))
-            self.y.append(y)
-
-    def near(self, h: float) -> np.ndarray:
-        nearest = sorted(range(len(self.h)), key=lambda i: abs(self.h[i] - h))[:3]
-        out = np.zeros_like(self.y[0])
-        for i in nearest:
-            weight = 1.0
-            for j in nearest:
-                if j != i:
-                    weight *= (h - self.h[j]) / (self.h[i] - self.h[j])
-            out += weight * self.y[i]
-        return out
-
-
 def test_functions(multipliers: np.ndarray) -> dict[str, float]:
     """Kuznetsov's test functions of a map's fixed point, from its multipliers."""
     mu = np.asarray(multipliers, dtype=complex)
@@ -162,30 +124,6 @@ def test_functions(multipliers: np.ndarray) -> dict[str, float]:
         "PD": float(np.prod(mu + 1).real),
         "NS": float(ns.real) if len(mu) > 1 else 1.0,
     }
-
-
-def _locating_function(kind: str, mu_a: np.ndarray, mu_b: np.ndarray):
-    """For a fold or a period doubling, ``μ ↦ Re μ_c ∓ 1`` with ``μ_c`` the real multiplier
-    nearest ``±1``, where it changes sign between the ends' multipliers ``mu_a`` and ``mu_b``
-    as the test function does: the same zero (the other factors of Kuznetsov's product do not
-    vanish there), but nearly linear in the arclength where the product of all multipliers is
-    not (a period-8 orbit's spread over orders of magnitude), so that regula falsi needs fewer
-    corrections.  None otherwise (e.g. a Neimark–Sacker pair): then the test function itself."""
-    if kind not in ("LP", "PD"):
-        return None
-    target = 1.0 if kind == "LP" else -1.0
-
-    def f(mu: np.ndarray) -> float:
-        mu = np.asarray(mu, dtype=complex)
-        real = mu[np.abs(mu.imag) <= 1e-12 * (1 + np.abs(mu.real))].real
-        if real.size == 0:
-            return math.nan
-        return float(real[np.argmin(np.abs(real - target))] - target)
-
-    a, b = f(mu_a), f(mu_b)
-    if not (math.isfinite(a) and math.isfinite(b)) or a == 0 or b == 0 or np.sign(a) == np.sign(b):
-        return None
-    return f
 
 
 def _has_complex_pair_on_unit_circle(multipliers: np.ndarray) -> bool:
