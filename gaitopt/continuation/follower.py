@@ -60,6 +60,9 @@ class Follower(SpecialPoints):
         self._coarsen_wait, self._coarsen_backoff = 0, 1  # see _try_coarser
         self._refined_here = False
         self._last_evaluation = None
+        # The evaluation at the last certified point, kept while special points between it and
+        # the one before are located (its tangent is taken after them).
+        self._accepted = None
         self.cycles: list[LimitCycle] = [first]
         self.special_points: list[SpecialPoint] = []
         self.stop = ""
@@ -98,6 +101,8 @@ class Follower(SpecialPoints):
         (:meth:`gaitopt.shooting.ShootingProblem.evaluate`), kept for the next use at the same
         point (the tangent, the error estimate, the multipliers and the certificate)."""
         key = (id(self.problem), y.tobytes())
+        if self._accepted is not None and self._accepted[0] == key:
+            return self._accepted[1]
         if self._last_evaluation is None or self._last_evaluation[0] != key:
             self._last_evaluation = (key, self.problem.evaluate(y[:-1], self._u(y), self._p(y)))
         return self._last_evaluation[1]
@@ -207,6 +212,7 @@ class Follower(SpecialPoints):
             discretisation_error=error,
             evaluation=self._evaluate(y),
         )
+        self._accepted = self._last_evaluation
         return cycle, y
 
     def _try_coarser(self, y: np.ndarray, error: float, again: bool = False) -> bool:
