@@ -229,15 +229,16 @@ def test_starts_dropped_before_the_certificate_would_not_have_been_born(monkeypa
     # doublings are the compass gait's (the slope study's values, located to 1e-10; 1e-9 here).
     from gaitopt.continuation import switching
     from gaitopt.shooting import solve_gait
+    from gaitopt.threads import single_blas_thread
 
-    dropped = []
+    dropped, kept = [], []
     original = switching.clearly_unborn
 
     def recording(problem, w0, u, p, parent):
-        unborn = original(problem, w0, u, p, parent)
-        if unborn:
-            dropped.append((problem, np.array(w0), np.array(u), np.array(p), parent))
-        return unborn
+        unborn, restart = original(problem, w0, u, p, parent)
+        start = (problem, np.array(w0), np.array(u), np.array(p), parent, np.array(restart))
+        (dropped if unborn else kept).append(start)
+        return unborn, restart
 
     monkeypatch.setattr(switching, "clearly_unborn", recording)
     model = gaitopt.model("compass_gait", slope=0.0525)
@@ -251,7 +252,18 @@ def test_starts_dropped_before_the_certificate_would_not_have_been_born(monkeypa
     np.testing.assert_allclose(pds, expected, rtol=0, atol=1e-9)
     assert dropped
     names = [spec.name for spec in model.parameter_specs()]
-    for problem, w0, u, p, parent in dropped:
+    for problem, w0, u, p, parent, _ in dropped:
         at = parent.model.replace(slope=float(p[names.index("slope")]))
         certified = solve_gait(at, problem, w0, u)
         assert not (certified.success and switching.born_at(certified, parent))
+    # The kept starts' orbits are certified from Newton's converged point (restart), which must
+    # give the orbit of the full solve from the start itself bit for bit (Newton stops at once).
+    # (One BLAS thread, as inside continuation: LAPACK's bits depend on the thread count.)
+    assert kept
+    solve = single_blas_thread(solve_gait)
+    for problem, w0, u, p, parent, restart in kept:
+        at = parent.model.replace(slope=float(p[names.index("slope")]))
+        full, reused = solve(at, problem, w0, u), solve(at, problem, restart, u)
+        assert full.success == reused.success
+        assert np.array_equal(full.solution, reused.solution)
+        assert full.discretisation == reused.discretisation

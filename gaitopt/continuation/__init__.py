@@ -6,10 +6,11 @@ A branch is followed in ``y = (w, ℓ)``: the shooting unknowns ``w`` of
 the tangent ``t`` (the null vector of ``[F_w, F_ℓ]``) and corrects with Newton on
 ``F(w, ℓ) = 0, ⟨t, y − y_pred⟩ = 0`` (Keller's pseudo-arclength method; Allgower & Georg,
 "Numerical Continuation Methods", §2.1); the inner product weights the ``N`` shooting unknowns by
-``1/N`` so that states and parameter count alike.  The step adapts to the corrector's work.  Every
-accepted point is certified like a solved gait (:func:`gaitopt.shooting.certify`: no false
+``1/N`` so that states and parameter count alike.  The step adapts to the corrector's work.
+Every accepted point is certified like a solved gait (:func:`gaitopt.shooting.certify`: no false
 gaits, multipliers, independent simulation) and its discretisation error estimated (the mesh is
-refined along the branch when needed).
+refined along the branch when needed, and coarsened again where the coarser mesh meets the
+tolerance).
 
 Special points come from test functions of the return map's Jacobian ``A`` (Kuznetsov,
 "Elements of Applied Bifurcation Theory", §10.2, maps): fold ``LP`` where ``det(A − I)`` changes

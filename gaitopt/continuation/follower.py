@@ -21,6 +21,9 @@ from .special import SpecialPoints, test_functions
 __all__ = ["Follower"]
 
 _MAX_MESH_REFINEMENTS = 4
+#: An error estimate at most this many times the step of the residual alone is at the residual's
+#: rounding floor (:meth:`Follower._try_coarser`).
+NOISE_FLOOR = 10.0
 
 
 class Follower(SpecialPoints):
@@ -49,10 +52,17 @@ class Follower(SpecialPoints):
                 down = model.replace(**{param: lam0 - h}).nominal_input()
                 self.du = (nominal - down) / h
         self.lam0 = float(getattr(model, param))
+        # The base class's nominal input (u = 0) depends on no parameter: no model to build.
+        self.nominal_varies = type(model).nominal_input is not HybridModel.nominal_input
         disc = first.discretisation or MultipleShooting(*type(model).mesh)
         self.problem: ShootingProblem = shooting_problem(type(model), disc, first.steps)
         self.refinements = 0
+        self._coarsen_wait, self._coarsen_backoff = 0, 1  # see _try_coarser
+        self._refined_here = False
         self._last_evaluation = None
+        # The evaluation at the last certified point, kept while special points between it and
+        # the one before are located (its tangent is taken after them).
+        self._accepted = None
         self.cycles: list[LimitCycle] = [first]
         self.special_points: list[SpecialPoint] = []
         self.stop = ""
@@ -72,7 +82,7 @@ class Follower(SpecialPoints):
         only to ~1e-10, and a gait whose input differs from its model's nominal one by that much
         is no longer recognised as nominal downstream, e.g. by the switch at a PD)."""
         lam = self.lam(y)
-        if self.nominal and lam != self.lam0:
+        if self.nominal and lam != self.lam0 and self.nominal_varies:
             try:
                 return self.model0.replace(**{self.param: lam}).nominal_input()
             except ParameterError:  # a predictor or corrector iterate outside the range
@@ -91,6 +101,8 @@ class Follower(SpecialPoints):
         (:meth:`gaitopt.shooting.ShootingProblem.evaluate`), kept for the next use at the same
         point (the tangent, the error estimate, the multipliers and the certificate)."""
         key = (id(self.problem), y.tobytes())
+        if self._accepted is not None and self._accepted[0] == key:
+            return self._accepted[1]
         if self._last_evaluation is None or self._last_evaluation[0] != key:
             self._last_evaluation = (key, self.problem.evaluate(y[:-1], self._u(y), self._p(y)))
         return self._last_evaluation[1]
@@ -112,7 +124,7 @@ class Follower(SpecialPoints):
 
     def correct(self, y_pred: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, bool, int]:
         """Newton on ``F(y) = 0, ⟨t, y − y_pred⟩_W = 0``; converged when ``|F| ≤ tol`` after a
-        step below 1e-12 (relative)."""
+        step below 1e-9 (relative)."""
         y = y_pred.copy()
         W = self.weights(y)
         F, J = self.jacobian(y)
@@ -155,7 +167,7 @@ class Follower(SpecialPoints):
 
         The mesh follows the discretisation error: refined (steps doubled) while the estimate
         exceeds ``tol``, coarsened again where half the steps would still meet it (the error
-        scales as h⁸)."""
+        scales as h⁸; :meth:`_try_coarser`), level by level while it does."""
         model = self.model_at(y)
         if model is None:
             return None, y
@@ -165,11 +177,15 @@ class Follower(SpecialPoints):
                 type(model), self.problem.disc.refined(), self.problem.cycles
             )
             self.refinements += 1
+            self._refined_here = True
             y, ok, _ = self.correct(y, self._unit_lambda())
             if not ok:
                 return None, y
             error = self._discretisation_error(y)
-        if self.problem.disc.rk_steps > type(model).mesh[1] and error < self.tol / 1000:
+        again = False
+        while self.problem.disc.rk_steps > type(model).mesh[1] and self._try_coarser(
+            y, error, again
+        ):
             coarse = shooting_problem(
                 type(model), self.problem.disc.coarsened(), self.problem.cycles
             )
@@ -180,8 +196,12 @@ class Follower(SpecialPoints):
             if coarse_error <= self.tol:
                 y, error = y_coarse, coarse_error
                 self.refinements = max(self.refinements - 1, 0)
+                self._coarsen_backoff, again = 1, True
             else:
                 self.problem = previous
+                self._coarsen_wait = self._coarsen_backoff
+                self._coarsen_backoff *= 2
+                break
         cycle = certify(
             model,
             self.problem,
@@ -192,7 +212,30 @@ class Follower(SpecialPoints):
             discretisation_error=error,
             evaluation=self._evaluate(y),
         )
+        self._accepted = self._last_evaluation
         return cycle, y
+
+    def _try_coarser(self, y: np.ndarray, error: float, again: bool = False) -> bool:
+        """Whether to try the mesh with half the RK steps at ``y`` (its error estimate
+        ``error``): where the estimate is below ``tol / 1000`` (the coarser mesh's error, about
+        2⁸ times larger, then meets ``tol``); or where it is below ``tol / 10`` but no larger than
+        :data:`NOISE_FLOOR` times the step the residual left at ``y`` alone would take (``|F_w⁻¹
+        F(y)|``): then the estimate measures that residual, at its rounding floor, and not the
+        mesh (a period-8 orbit on a refined mesh: ~1e-12 either way), so only trying says whether
+        the coarser mesh meets ``tol``.  The second kind only for a mesh the branch started on
+        (its first gait's, e.g. chosen by the switch's solve next to a PD), never once the branch
+        has refined its mesh itself.  After a failed try of the second kind the next points skip
+        it, for twice as many points after each further failure.  ``again``: a coarser mesh
+        was just taken at this point; only the second kind goes on down (one level per point by
+        the first, as the error's h⁸ scaling has it)."""
+        if error < self.tol / 1000 and not again:
+            return True
+        if error >= self.tol / 10 or self._coarsen_wait > 0 or self._refined_here:
+            self._coarsen_wait = max(self._coarsen_wait - 1, 0)
+            return False
+        ev = self._evaluate(y)
+        leftover = structured.solve(ev.F_w, ev.F, pattern_of(self.problem))
+        return bool(error <= NOISE_FLOOR * np.max(np.abs(leftover)))
 
     def _unit_lambda(self) -> np.ndarray:
         t = np.zeros(self.problem.size + 1)

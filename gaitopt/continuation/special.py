@@ -22,7 +22,7 @@ LOCATE_TOL = 1e-10
 class SpecialPoints:
     """Locating special points: a base of :class:`~gaitopt.continuation.follower.Follower`,
     which provides ``correct``, ``certified``, ``lam``, ``weights``, ``multipliers_at``,
-    ``model_at``, ``_u``, ``cycles``, ``special_points``, ``problem``, ``param``."""
+    ``model_at``, ``_u``, ``_evaluate``, ``cycles``, ``special_points``, ``problem``, ``param``."""
 
     # -- special points ---------------------------------------------------------------------
     def _special_points_between(self, y, t, y_new, tests, cycle, h_total, new_tests=None):
@@ -63,8 +63,9 @@ class SpecialPoints:
         if model is None:
             return None
         cycle = certify(
-            model, self.problem, y_mid[:-1], self._u(y_mid), verify=self.verify, tol=self.tol
-        )
+            model, self.problem, y_mid[:-1], self._u(y_mid), verify=self.verify, tol=self.tol,
+            evaluation=self._evaluate(y_mid),  # kept from the last correction: not recomputed
+        )  # fmt: skip
         multipliers = cycle.multipliers if cycle.success else self.multipliers_at(y_mid)
         if kind == "NS" and not _has_complex_pair_on_unit_circle(multipliers):
             return None  # a neutral saddle (real μ_i μ_j = 1), not a Neimark–Sacker point

@@ -25,6 +25,7 @@ from ..errors import GaitoptInputError, ParameterError
 from ..orbit.sensitivity import section_jacobians
 from ..result import LimitCycle
 from ..shooting import find_limit_cycle, shooting_problem, solve_gait
+from ..shooting.newton import NEWTON_OPTIONS
 from .branch import Branch, SpecialPoint
 
 __all__ = ["doubled_unknowns", "switch_at_period_doubling"]
@@ -63,24 +64,33 @@ def born_at(doubled: LimitCycle, parent: LimitCycle) -> bool:
     return bool(near and np.min(np.abs(doubled.multipliers - 1)) < BORN_MULTIPLIER)
 
 
-def clearly_unborn(problem, w0, u, p, parent: LimitCycle) -> bool:
+def clearly_unborn(problem, w0, u, p, parent: LimitCycle) -> tuple[bool, np.ndarray]:
     """Whether Newton from ``w0`` (the solve :func:`solve_gait` starts with) converges to an
     orbit that misses :func:`born_at` by more than :data:`UNBORN_MARGIN`, so that certifying and
     simulating it (most of a candidate's cost) can be skipped.  False wherever that is not
-    certain (no convergence, a singular return map): then the full solve decides."""
+    certain (no convergence, a singular return map): then the full solve decides.
+
+    Also the start for that full solve: Newton's solution where it met Newton's own residual
+    test (``max |F| ≤ 1e-12``, ``NEWTON_OPTIONS["abstol"]``), from which the same Newton stops
+    at once, at the same point, so that :func:`solve_gait` gives the orbit it gives from ``w0``
+    bit for bit without running Newton twice; else ``w0``."""
     solution = problem.solve(w0, u, p)
     ev = solution.evaluation
     if not solution.converged or ev is None or not np.all(np.isfinite(ev.F_w)):
-        return False
+        return False, w0
+    restart = w0
+    if np.max(np.abs(ev.F)) <= NEWTON_OPTIONS["abstol"]:  # ev: Newton's own at solution.w
+        restart = solution.w
     try:
         A, _ = section_jacobians(problem.map_jacobian(ev.F_w), ev.F_u, problem.m, problem.n_g)
         multipliers = np.linalg.eigvals(A)
     except np.linalg.LinAlgError:
-        return False
+        return False, restart
     scale = 1 + np.max(np.abs(parent.section_point))
     distance = np.max(np.abs(problem.section_point(solution.w) - parent.section_point))
     far = distance >= BORN_NEAR * scale * UNBORN_MARGIN
-    return bool(far or np.min(np.abs(multipliers - 1)) >= BORN_MULTIPLIER * UNBORN_MARGIN)
+    unborn = far or np.min(np.abs(multipliers - 1)) >= BORN_MULTIPLIER * UNBORN_MARGIN
+    return bool(unborn), restart
 
 
 def switch_at_period_doubling(
@@ -207,10 +217,11 @@ def _candidates(cycle, model, problem, w2, null, eps, u, verify, tol, simulated)
     """
     if not simulated:
         try:
-            if clearly_unborn(problem, w2 + eps * null, u, model.p, cycle):
+            unborn, restart = clearly_unborn(problem, w2 + eps * null, u, model.p, cycle)
+            if unborn:
                 yield UNBORN
-            else:  # the same start again, certified (its Newton runs once more: milliseconds)
-                yield solve_gait(model, problem, w2 + eps * null, u, verify=verify, tol=tol)
+            else:  # the same orbit, certified (Newton stops at once where it had converged)
+                yield solve_gait(model, problem, restart, u, verify=verify, tol=tol)
         except GaitoptInputError as exc:
             yield str(exc)
         return
