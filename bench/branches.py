@@ -80,19 +80,7 @@ def simulate_python_task(point: dict[str, Any]) -> dict[str, Any]:
     stepper driven from Python, the brute-force per-slope loop a user writes (``solve_ivp`` with
     events, one step after another; the same convention as :mod:`bench.basin`'s per-start loop).
     A module-level function, so that Dask pickles it by reference."""
-    from gaitopt.models import model as make_model
-    from gaitopt.simulation import simulate
-
-    model = make_model(point["model"], **point.get("params", {}))
-    sim = simulate(model, point.get("x0"), steps=int(point["steps"]), backend="python")
-    keep = int(point.get("record", 1))
-    return {
-        "success": sim.success,
-        "status": sim.status,
-        "steps": sim.steps,
-        "states": sim.section_states[-keep:].tolist() if sim.steps else [],
-        "times": np.diff(sim.section_times)[-keep:].tolist() if sim.steps else [],
-    }
+    return simulate_task({**point, "backend": "python"})
 
 
 #: The orbit diagram's simulations: the baseline issue 23 set its goal against (the brute-force

@@ -391,12 +391,13 @@ def _as_policy(model: HybridModel, inputs) -> InputPolicy:
 
 def simulate_task(point: Mapping[str, Any]) -> dict[str, Any]:
     """Simulate ``point["steps"]`` steps (a task of :func:`gaitopt.sweep.sweep`): ``{"model",
-    "params", "x0": {...}, "steps": N, "record": K}`` → status, steps completed and the last
-    ``K`` section states."""
+    "params", "x0": {...}, "steps": N, "record": K, "backend": B}`` → status, steps completed and
+    the last ``K`` section states (``backend`` as in :func:`simulate`, default ``"auto"``)."""
     from ..models import model as make_model
 
     model = make_model(point["model"], **point.get("params", {}))
-    sim = simulate(model, point.get("x0"), steps=int(point["steps"]))
+    backend = str(point.get("backend", "auto"))
+    sim = simulate(model, point.get("x0"), steps=int(point["steps"]), backend=backend)
     keep = int(point.get("record", 1))
     return {
         "success": sim.success,
