@@ -1,10 +1,10 @@
 """The C source of the compiled shooting Newton (:mod:`gaitopt.kernels.newton`).
 
 One library for every model class and mesh: it calls a model's compiled kernels
-(:mod:`gaitopt.kernels.symbolic`: ``lift``, per phase ``fold_i``, ``end_i`` and the residual's
-``step_i``) through their addresses, as the arc driver does (:mod:`gaitopt.kernels.arc_driver`),
-so nothing of a model is compiled twice and the mesh (segments, RK steps per segment, period) is
-an argument.  It holds
+(:mod:`gaitopt.kernels.symbolic`: ``lift``, per phase ``fold_i``, ``end_i``, the residual's
+``step_i`` and, where the phase has one, ``foldx_i``) through their addresses, as the arc
+driver does (:mod:`gaitopt.kernels.arc_driver`), so nothing of a model is compiled twice and the
+mesh (segments, RK steps per segment, period) is an argument.  It holds
 
 * ``gaitopt_newton_eval`` — the shooting residual and (with ``jac``) its Jacobians ``∂F/∂w``,
   ``∂F/∂u``, ``∂F/∂p``, the return state, the phase ends, guard rates and admissibility: the
@@ -14,7 +14,11 @@ an argument.  It holds
   (same stopping tests in the same order: a non-finite ``F`` or ``∂F/∂w`` stops, ``max |F| ≤
   abstol`` converges, else the step by an LU with partial pivoting (LAPACK ``getrf``'s pivot
   choice: the first entry of largest modulus), ``max |step| ≤ abstol_step`` converges at the
-  point before the step, else ``w ← w − step``), leaving the evaluation at the last point;
+  point before the step, else ``w ← w − step``), leaving the evaluation at the last point.  Its
+  iterations evaluate ``∂F/∂w`` alone (``jac`` 2: the phases with a ``foldx_i`` carry only the
+  segment start's and duration's derivatives, the kneed walker's first phase 7 columns instead
+  of 20); at the point it returns the full evaluation is made once (``∂F/∂u``, ``∂F/∂p`` for the
+  return map; ``∂F/∂w`` the same to the bit);
 * ``gaitopt_newton_map`` — the return map's Jacobians at that point by block elimination of the
   same Jacobian (eq. (1) of :mod:`gaitopt.orbit.sensitivity`: ``A = P_s − P_z G_z⁻¹ G_s``,
   ``B_u``, ``B_p`` likewise, ``G_z`` factored once);

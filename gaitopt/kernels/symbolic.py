@@ -67,7 +67,8 @@ def _step(flow: ca.Function, name: str) -> ca.Function:
 def _stage(flow: ca.Function, name: str, reduced: bool = False) -> ca.Function:
     """``stage(x, dx, u, p) -> (k, dk)``: the flow ``k = f(x, u, p)`` and the derivative of a
     stage's rate, ``dk = f_x·dx + [0, f_u, f_p, 0]`` (SX, ``f_x`` sparse), ``dx`` the stage
-    state's derivative with respect to ``[x₀; u; p; h]`` (``reduced``: ``[x₀; h]``, ``dk = f_x·dx``)."""
+    state's derivative with respect to ``[x₀; u; p; h]`` (``reduced``: ``[x₀; h]`` and ``dk =
+    f_x·dx``, the same products for those columns)."""
     n, nu, np_ = flow.size1_in(0), flow.size1_in(1), flow.size1_in(2)
     m = n + 1 if reduced else n + nu + np_ + 1
     x, u, p = ca.SX.sym("x", n), ca.SX.sym("u", nu), ca.SX.sym("p", np_)
