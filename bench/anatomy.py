@@ -19,7 +19,8 @@ With Drake installed, the compass gait's warm verified solve is also set against
 rounds) in this process, each in CPU and wall time: the issue's goal of 20×, measured with both
 sides under the same load.
 
-``--compare`` also times each model without the compiled Newton (Newton in Python on the
+``--compare`` also times each model with the compiled Newton iterating on the full folds (as
+before the reduced ``foldx`` kernels) and without the compiled Newton (Newton in Python on the
 one-call CasADi assembly, the solve as before :mod:`gaitopt.kernels.newton`), in alternation
 with it.  Writes ``results/bench_anatomy.json`` (``--out``); ``--quick``: 5 repeats.
 """
@@ -107,12 +108,40 @@ def _without_compiled_newton() -> Iterator[None]:
         Assembly.compiled_newton = original
 
 
-def anatomy(name: str, repeats: int, *, compiled: bool = True) -> dict[str, Any]:
+@contextlib.contextmanager
+def _without_reduced_folds() -> Iterator[None]:
+    """The compiled Newton as before the reduced folds (``foldx``,
+    :func:`gaitopt.kernels.symbolic.kernel_functions`): every iteration evaluates the full
+    ``fold`` (``CompiledNewton.build(asm, reduced=False)``, kept per assembly beside the other;
+    put back on exit)."""
+    from gaitopt.kernels.assemble import Assembly
+    from gaitopt.kernels.newton import CompiledNewton
+
+    original = Assembly.__dict__["compiled_newton"]
+
+    def full(self):
+        if "_compiled_newton_full" not in self.__dict__:
+            self.__dict__["_compiled_newton_full"] = CompiledNewton.build(self, reduced=False)
+        return self.__dict__["_compiled_newton_full"]
+
+    Assembly.compiled_newton = full
+    try:
+        yield
+    finally:
+        Assembly.compiled_newton = original
+
+
+def anatomy(name: str, repeats: int, *, compiled: bool | str = True) -> dict[str, Any]:
     """The stages of ``repeats`` warm verified solves of model ``name`` (see the module
     docstring): medians in ms, calls per solve, the total's median CPU and wall time; with
-    ``compiled=False`` as before the compiled Newton (:func:`_without_compiled_newton`)."""
-    if not compiled:
+    ``compiled=False`` as before the compiled Newton (:func:`_without_compiled_newton`), with
+    ``compiled="full"`` the compiled Newton without the reduced folds
+    (:func:`_without_reduced_folds`)."""
+    if compiled is False:
         with _without_compiled_newton():
+            return anatomy(name, repeats)
+    if compiled == "full":
+        with _without_reduced_folds():
             return anatomy(name, repeats)
     import gaitopt
 
@@ -148,16 +177,18 @@ def anatomy(name: str, repeats: int, *, compiled: bool = True) -> dict[str, Any]
 
 
 def compare(name: str, repeats: int, rounds: int = 3) -> dict[str, Any]:
-    """:func:`anatomy` with and without the compiled Newton in alternation (``rounds`` of each,
-    ``repeats`` solves per round): the medians of the rounds' medians (CPU ms), so both sides
-    see the same load."""
+    """:func:`anatomy` with the compiled Newton (``compiled``), with it iterating on the full
+    folds (``full``: as before the reduced folds) and without it (``python``) in alternation
+    (``rounds`` of each, ``repeats`` solves per round): the medians of the rounds' medians (CPU
+    ms), so every side sees the same load."""
     keys = {"cpu": None, "newton": "Newton", "error": "error estimate",
             "multipliers": "multipliers", "certificate": "certificate"}  # fmt: skip
-    found: dict[str, list[float]] = {f"{side}_{k}_ms": [] for side in ("compiled", "python")
+    sides = {"compiled": True, "full": "full", "python": False}
+    found: dict[str, list[float]] = {f"{side}_{k}_ms": [] for side in sides
                                      for k in keys}  # fmt: skip
     for _ in range(rounds):
-        for side in ("compiled", "python"):
-            entry = anatomy(name, repeats, compiled=side == "compiled")
+        for side, how in sides.items():
+            entry = anatomy(name, repeats, compiled=how)
             for k, label in keys.items():
                 value = entry["cpu_ms"] if label is None else entry["stages_ms"][label]
                 found[f"{side}_{k}_ms"].append(value)
@@ -227,8 +258,12 @@ def kernel_steps(name: str, calls: int = 2000) -> list[dict[str, float]]:
         x = x0[:n] if i == 0 else np.full(n, 0.1)
         D = np.hstack([np.eye(n), np.zeros((n, fold.size2_in(1) - n))])
         entry = {"states": n, "derivative_columns": int(fold.size2_in(1))}
-        for label, f, args in (("fold_us", fold, (x, D, u, p, 0.01, 5)),
-                               ("step_us", steps[i], (x, u, p, 0.01, 5))):  # fmt: skip
+        timed = [("fold_us", fold, (x, D, u, p, 0.01, 5)),
+                 ("step_us", steps[i], (x, u, p, 0.01, 5))]  # fmt: skip
+        if kern.foldx[i] is not None:  # the reduced fold Newton iterates with
+            Dx = np.hstack([np.eye(n), np.zeros((n, 1))])
+            timed.append(("foldx_us", kern.foldx[i], (x, Dx, u, p, 0.01, 5)))
+        for label, f, args in timed:
             buffer, trigger = f.buffer()
             keep = [np.array(a, dtype=float).ravel(order="F") for a in args]
             keep += [np.zeros(f.nnz_out(j)) for j in range(f.n_out())]
@@ -263,8 +298,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, default=60)
     parser.add_argument("--quick", action="store_true", help="5 repeats")
     parser.add_argument("--compare", action="store_true",
-                        help="also without the compiled Newton (Newton in Python, as before "
-                        "it), in alternation with it: three rounds of each")  # fmt: skip
+                        help="also with the compiled Newton on the full folds (as before the "
+                        "reduced ones) and without the compiled Newton (Newton in Python, as "
+                        "before it), in alternation with it: three rounds of each")  # fmt: skip
     parser.add_argument("--out", type=Path, default=Path("results/bench_anatomy.json"))
     args = parser.parse_args(argv)
     if args.repeats < 1:
@@ -291,9 +327,15 @@ def main(argv: list[str] | None = None) -> int:
                   f"{c['compiled_multipliers_ms']:.3f} vs {c['python_multipliers_ms']:.3f} ms, "
                   f"certificate {c['compiled_certificate_ms']:.3f} vs "
                   f"{c['python_certificate_ms']:.3f} ms")  # fmt: skip
+            print(
+                f"  reduced folds vs full folds in the compiled Newton (the same rounds): "
+                f"whole solve {c['compiled_cpu_ms']:.2f} vs {c['full_cpu_ms']:.2f} ms, "
+                f"Newton {c['compiled_newton_ms']:.3f} vs {c['full_newton_ms']:.3f} ms"
+            )
         for i, k in enumerate(entry["kernel_steps"]):
-            print(f"  phase {i}: RK step with derivatives {k['fold_us']:.2f} µs, without "
-                  f"{k['step_us']:.2f} µs")  # fmt: skip
+            reduced = f", Newton's (foldx) {k['foldx_us']:.2f} µs" if "foldx_us" in k else ""
+            print(f"  phase {i}: RK step with derivatives {k['fold_us']:.2f} µs{reduced}, "
+                  f"without {k['step_us']:.2f} µs")  # fmt: skip
     if "compass_gait" in args.models:
         vs = record["compass_vs_drake"] = versus_drake(repeats)
         if vs is not None:

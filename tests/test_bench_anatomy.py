@@ -44,6 +44,22 @@ def test_kernel_steps_name_each_phase_and_its_derivative_columns():
     for s in steps:
         assert s["derivative_columns"] == s["states"] + len(m.inputs) + len(m.p) + 1
         assert s["fold_us"] > 0 and s["step_us"] > 0
+    if gaitopt.kernels.model_kernels(type(m)).compiled:  # the reduced folds (staged phases)
+        assert all(s["foldx_us"] > 0 for s in steps)
+
+
+def test_anatomy_with_full_folds_restores_the_hook():
+    # Source: the solve's own record — the compiled Newton on the full folds takes the same
+    # number of Newton iterations as on the reduced ones (the same state and duration columns,
+    # tests/test_kernels_foldx.py); the assembly's hook is put back afterwards.
+    from gaitopt.kernels.assemble import Assembly
+
+    before = Assembly.__dict__["compiled_newton"]
+    full = anatomy.anatomy("kneed_walker", 2, compiled="full")
+    assert Assembly.__dict__["compiled_newton"] is before
+    reduced = anatomy.anatomy("kneed_walker", 2)
+    assert full["success"] and full["verified"]
+    assert full["newton_iterations"] == reduced["newton_iterations"]
 
 
 def test_anatomy_without_the_compiled_newton_is_the_python_newton():

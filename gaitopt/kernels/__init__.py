@@ -39,7 +39,8 @@ __all__ = [
 
 
 class ModelKernels:
-    """The kernels of one model class: ``lift`` and, per phase, ``fold`` and ``end``."""
+    """The kernels of one model class: ``lift`` and, per phase, ``fold``, ``end`` and
+    ``foldx`` (None where the phase has none)."""
 
     def __init__(self, model_cls, *, verbose: bool = True):
         name = f"gaitopt_{model_cls.__name__.lower()}"
@@ -50,9 +51,14 @@ class ModelKernels:
             key=source_key(name, model_cls),
             flags=_flags,
         )
+        names = [f.name() for f in loaded]
         self.lift = loaded[0]
-        self.fold = loaded[1::2]
-        self.end = loaded[2::2]
+        self.fold = [f for f in loaded if f.name().startswith("fold_")]
+        self.end = [f for f in loaded if f.name().startswith("end_")]
+        #: per phase its ``foldx`` (the fold carrying only the states' and duration's
+        #: derivatives, :func:`~gaitopt.kernels.symbolic.kernel_functions`) or None
+        self.foldx = [loaded[names.index(f"foldx_{i}")] if f"foldx_{i}" in names else None
+                      for i in range(len(self.fold))]  # fmt: skip
         self.n = [f.size1_in(0) for f in self.fold]
         self.n_u = len(model_cls.inputs)
         self.n_p = len(model_cls.parameter_specs())

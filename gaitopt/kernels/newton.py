@@ -146,7 +146,7 @@ class CompiledNewton:
     Newton library (see the module docstring); :meth:`build` returns None where it cannot be.
     """
 
-    def __init__(self, asm: Any, lib: ctypes.CDLL):
+    def __init__(self, asm: Any, lib: ctypes.CDLL, *, reduced: bool = True):
         from . import model_kernels, step_kernels
 
         cls = asm._model_cls
@@ -182,6 +182,12 @@ class CompiledNewton:
             else:
                 fns += [0, 0]
                 specs.append(np.zeros(1, dtype=np.int32))
+            if reduced and kern.foldx[i] is not None:  # Newton's iterations: ∂x/∂[x₀; hs] only
+                fns += [*_address(kernels, f"foldx_{i}")]
+                specs.append(_spec(kern.foldx[i]))
+            else:
+                fns += [0, 0]
+                specs.append(np.zeros(1, dtype=np.int32))
         self.n_return = int(kern.end[asm.chain[-1]].sparsity_out(4).numel())
         self._specs = specs  # kept alive: the driver reads them at each call
         self.specs = (ctypes.c_void_p * len(specs))(*(s.ctypes.data for s in specs))
@@ -190,14 +196,17 @@ class CompiledNewton:
         self._local = threading.local()
 
     @classmethod
-    def build(cls, asm: Any) -> CompiledNewton | None:
+    def build(cls, asm: Any, *, reduced: bool = True) -> CompiledNewton | None:
         """The compiled Newton of ``asm``, or None (no compiler, kernels not compiled or not
-        indexed, a sparse kernel input)."""
+        indexed, a sparse kernel input).  With ``reduced`` (default) Newton iterates with the
+        phases' ``foldx`` kernels where they exist (the state and duration columns alone) and
+        evaluates the full ``fold`` once at the point it returns; without, every iteration
+        evaluates the full ``fold`` (the previous path, for comparison)."""
         lib = driver()
         if lib is None:
             return None
         try:
-            return cls(asm, lib)
+            return cls(asm, lib, reduced=reduced)
         except (NotImplementedError, OSError, AttributeError, RuntimeError):
             return None
 

@@ -1,10 +1,10 @@
 """The C source of the compiled shooting Newton (:mod:`gaitopt.kernels.newton`).
 
 One library for every model class and mesh: it calls a model's compiled kernels
-(:mod:`gaitopt.kernels.symbolic`: ``lift``, per phase ``fold_i``, ``end_i`` and the residual's
-``step_i``) through their addresses, as the arc driver does (:mod:`gaitopt.kernels.arc_driver`),
-so nothing of a model is compiled twice and the mesh (segments, RK steps per segment, period) is
-an argument.  It holds
+(:mod:`gaitopt.kernels.symbolic`: ``lift``, per phase ``fold_i``, ``end_i``, the residual's
+``step_i`` and, where the phase has one, ``foldx_i``) through their addresses, as the arc
+driver does (:mod:`gaitopt.kernels.arc_driver`), so nothing of a model is compiled twice and the
+mesh (segments, RK steps per segment, period) is an argument.  It holds
 
 * ``gaitopt_newton_eval`` — the shooting residual and (with ``jac``) its Jacobians ``∂F/∂w``,
   ``∂F/∂u``, ``∂F/∂p``, the return state, the phase ends, guard rates and admissibility: the
@@ -14,7 +14,11 @@ an argument.  It holds
   (same stopping tests in the same order: a non-finite ``F`` or ``∂F/∂w`` stops, ``max |F| ≤
   abstol`` converges, else the step by an LU with partial pivoting (LAPACK ``getrf``'s pivot
   choice: the first entry of largest modulus), ``max |step| ≤ abstol_step`` converges at the
-  point before the step, else ``w ← w − step``), leaving the evaluation at the last point;
+  point before the step, else ``w ← w − step``), leaving the evaluation at the last point.  Its
+  iterations evaluate ``∂F/∂w`` alone (``jac`` 2: the phases with a ``foldx_i`` carry only the
+  segment start's and duration's derivatives, the kneed walker's first phase 7 columns instead
+  of 20); at the point it returns the full evaluation is made once (``∂F/∂u``, ``∂F/∂p`` for the
+  return map; ``∂F/∂w`` the same to the bit);
 * ``gaitopt_newton_map`` — the return map's Jacobians at that point by block elimination of the
   same Jacobian (eq. (1) of :mod:`gaitopt.orbit.sensitivity`: ``A = P_s − P_z G_z⁻¹ G_s``,
   ``B_u``, ``B_p`` likewise, ``G_z`` factored once);
@@ -110,8 +114,9 @@ typedef struct {
   int K, S, m, size, nu, np, n_g, max_n, nr_last;
   int *n, *off, *offT, *sec, *ng, *nr;
   gn_call lift;
-  gn_call *fold, *end, *step;
-  int have_step;
+  gn_call *fold, *end, *step, *foldx;
+  int have_step, have_foldx;
+  int* hasx;  /* per chain element: 1 where it has a foldx */
   /* outputs (owned by the caller): F, J (row-major size x size), Ju, Jp, x_return, ends, rates,
      admissible */
   double *F, *J, *Ju, *Jp, *xret, *ends, *rates, *adm;
@@ -131,13 +136,15 @@ CASADI_SYMBOL_EXPORT void gaitopt_newton_close(gn_problem* h) {
     if (h->fold) gn_close(&h->fold[k]);
     if (h->end) gn_close(&h->end[k]);
     if (h->step) gn_close(&h->step[k]);
+    if (h->foldx) gn_close(&h->foldx[k]);
   }
-  free(h->fold); free(h->end); free(h->step); free(h->n); free(h->xl);
+  free(h->fold); free(h->end); free(h->step); free(h->foldx); free(h->n); free(h->xl);
   free(h->lu); free(h->piv); free(h->Z); free(h->scratch);
   free(h);
 }
 
-/* fns: lift (f, work), then per chain element fold, end, step (f, work; step may be 0, 0).
+/* fns: lift (f, work), then per chain element fold, end, step, foldx (f, work; step and foldx
+   may be 0, 0).
    specs: the same functions' output specs (see gn_open).  outs: F, J, Ju, Jp, x_return, ends,
    rates, admissible (the caller's arrays). */
 CASADI_SYMBOL_EXPORT gn_problem* gaitopt_newton_open(const int* dims, void** fns,
@@ -147,13 +154,16 @@ CASADI_SYMBOL_EXPORT gn_problem* gaitopt_newton_open(const int* dims, void** fns
   if (!h) return 0;
   K = h->K = dims[0]; h->S = dims[1]; h->m = dims[2]; h->size = dims[3];
   h->nu = dims[4]; h->np = dims[5];
-  h->n = (int*)calloc(7 * K + h->m + 1, sizeof(int));
+  h->n = (int*)calloc(8 * K + h->m + 1, sizeof(int));
   h->fold = (gn_call*)calloc(K, sizeof(gn_call));
   h->end = (gn_call*)calloc(K, sizeof(gn_call));
   h->step = (gn_call*)calloc(K, sizeof(gn_call));
-  if (!h->n || !h->fold || !h->end || !h->step) { gaitopt_newton_close(h); return 0; }
+  h->foldx = (gn_call*)calloc(K, sizeof(gn_call));
+  if (!h->n || !h->fold || !h->end || !h->step || !h->foldx) {
+    gaitopt_newton_close(h); return 0;
+  }
   h->off = h->n + K; h->offT = h->n + 2 * K; h->ng = h->n + 3 * K; h->nr = h->n + 4 * K;
-  h->sec = h->n + 7 * K;
+  h->sec = h->n + 7 * K; h->hasx = h->n + 7 * K + h->m;
   for (k = 0; k < K; k++) {
     h->n[k] = dims[6 + 3 * k]; h->off[k] = dims[7 + 3 * k]; h->offT[k] = dims[8 + 3 * k];
     if (h->n[k] > max_n) max_n = h->n[k];
@@ -162,14 +172,18 @@ CASADI_SYMBOL_EXPORT gn_problem* gaitopt_newton_open(const int* dims, void** fns
   h->max_n = max_n;
   if (gn_open(&h->lift, fns[0], fns[1], specs[0])) { gaitopt_newton_close(h); return 0; }
   h->have_step = 1;
+  h->have_foldx = 0;
   for (k = 0; k < K; k++) {
-    if (gn_open(&h->fold[k], fns[2 + 6 * k], fns[3 + 6 * k], specs[1 + 3 * k]) ||
-        gn_open(&h->end[k], fns[4 + 6 * k], fns[5 + 6 * k], specs[2 + 3 * k])) {
+    if (gn_open(&h->fold[k], fns[2 + 8 * k], fns[3 + 8 * k], specs[1 + 4 * k]) ||
+        gn_open(&h->end[k], fns[4 + 8 * k], fns[5 + 8 * k], specs[2 + 4 * k])) {
       gaitopt_newton_close(h); return 0;
     }
-    if (!fns[6 + 6 * k] || gn_open(&h->step[k], fns[6 + 6 * k], fns[7 + 6 * k],
-                                   specs[3 + 3 * k]))
+    if (!fns[6 + 8 * k] || gn_open(&h->step[k], fns[6 + 8 * k], fns[7 + 8 * k],
+                                   specs[3 + 4 * k]))
       h->have_step = 0;
+    h->hasx[k] = fns[8 + 8 * k] && !gn_open(&h->foldx[k], fns[8 + 8 * k], fns[9 + 8 * k],
+                                             specs[4 + 4 * k]);
+    if (h->hasx[k]) h->have_foldx = 1;
     h->ng[k] = h->end[k].nnz[3 * 0 + 1];  /* numel of g */
     h->nr[k] = h->end[k].nnz[3 * 4 + 1];  /* numel of r */
     if (h->ng[k] > max_g) max_g = h->ng[k];
@@ -248,7 +262,9 @@ static void gn_add_state(gn_problem* h, int k, int R, int j, const double* D, do
 }
 
 /* The shooting equations at w with N RK steps per segment (see the module docstring); jac: 1
-   with the Jacobians, 0 the residual alone. */
+   with the Jacobians, 0 the residual alone, 2 with dF/dw alone (Newton's iterations: the
+   segments of the chain elements with a foldx carry only their derivatives with respect to the
+   segment start and the duration; Ju and Jp are then incomplete). */
 CASADI_SYMBOL_EXPORT int gaitopt_newton_eval(gn_problem* h, const double* w, const double* u,
                                              const double* p, int N, int jac) {
   int K = h->K, S = h->S, m = h->m, size = h->size, nu = h->nu, np = h->np;
@@ -266,7 +282,11 @@ CASADI_SYMBOL_EXPORT int gaitopt_newton_eval(gn_problem* h, const double* w, con
     memset(h->Jp, 0, sizeof(double) * size * np);
   }
   for (k = 0; k < K; k++) {
-    int n = h->n[k], q = n + nu + np + 1, ng = h->ng[k], nr = h->nr[k], offT = h->offT[k], c;
+    int n = h->n[k], ng = h->ng[k], nr = h->nr[k], offT = h->offT[k], c;
+    int reduced = jac == 2 && h->hasx[k];
+    int q = reduced ? n + 1 : n + nu + np + 1;  /* D's columns: [x0; u; p; hs] or [x0; hs] */
+    int nup = reduced ? 0 : 1;                   /* D has the u and p columns */
+    gn_call* fold = reduced ? &h->foldx[k] : &h->fold[k];
     double T = w[offT], hs = T / S;
     const double* Dl;
     const double* x_end;
@@ -283,7 +303,7 @@ CASADI_SYMBOL_EXPORT int gaitopt_newton_eval(gn_problem* h, const double* w, con
         if (folds) {
           args[1] = D; args[2] = u; args[3] = p; args[4] = &hs; args[5] = &Nd;
           outs[1] = Dn;
-          code = gn_run(&h->fold[k], args, 6, outs);
+          code = gn_run(fold, args, 6, outs);
           swap = D; D = Dn; Dn = swap;
         } else {
           args[1] = u; args[2] = p; args[3] = &hs; args[4] = &Nd;
@@ -306,6 +326,7 @@ CASADI_SYMBOL_EXPORT int gaitopt_newton_eval(gn_problem* h, const double* w, con
         gn_add_state(h, k, R, j, D, -1.0);
         for (i = 0; i < n; i++) {
           h->J[(R + i) * size + offT] -= D[i + n * (q - 1)] / S;
+          if (!nup) continue;
           for (l = 0; l < nu; l++) h->Ju[(R + i) * nu + l] -= D[i + n * (n + l)];
           for (l = 0; l < np; l++) h->Jp[(R + i) * np + l] -= D[i + n * (n + nu + l)];
         }
@@ -320,8 +341,8 @@ CASADI_SYMBOL_EXPORT int gaitopt_newton_eval(gn_problem* h, const double* w, con
       Dl = h->Ds + (S - 1) * n * q;
       memset(h->E, 0, sizeof(double) * n * size);
       for (i = 0; i < n; i++) {
-        for (l = 0; l < np; l++) h->Ep[i * np + l] = Dl[i + n * (n + nu + l)];
-        for (l = 0; l < nu; l++) h->Eu[i * nu + l] = Dl[i + n * (n + l)];
+        for (l = 0; l < np; l++) h->Ep[i * np + l] = nup ? Dl[i + n * (n + nu + l)] : 0.0;
+        for (l = 0; l < nu; l++) h->Eu[i * nu + l] = nup ? Dl[i + n * (n + l)] : 0.0;
       }
       c = gn_col(h, k, S - 1);
       for (i = 0; i < n; i++) {
@@ -516,21 +537,33 @@ static double gn_max_abs(const double* v, int n) {
    abstol), 2 (max |step| <= abstol_step), 0 (max_iter iterations), -1 (F or dF/dw not finite),
    -2 (dF/dw exactly singular: the caller's least squares), other: a kernel failed.  The
    evaluation (F, J, ...) is left at the returned w. */
+static int gn_full(gn_problem* h, const double* w, const double* u, const double* p, int N,
+                   int result) {
+  int code;
+  if (!h->have_foldx) return result;
+  if ((code = gaitopt_newton_eval(h, w, u, p, N, 1))) return code > 0 ? 100 + code : code - 100;
+  return result;
+}
+
 CASADI_SYMBOL_EXPORT int gaitopt_newton_solve(gn_problem* h, double* w, const double* u,
                                               const double* p, int N, int max_iter,
                                               double abstol, double abstol_step, double* info) {
-  int it, i, code, size = h->size;
+  int it, i, code, size = h->size, mode = h->have_foldx ? 2 : 1;
+  /* The iterations need dF/dw alone (mode 2: the foldx kernels); at the point returned the
+     full evaluation (the fold kernels: dF/du, dF/dp for the return map, and dF/dw as without
+     foldx) is made once. */
   for (it = 1; it <= max_iter; it++) {
-    if ((code = gaitopt_newton_eval(h, w, u, p, N, 1))) return code > 0 ? 100 + code : code - 100;
+    if ((code = gaitopt_newton_eval(h, w, u, p, N, mode)))
+      return code > 0 ? 100 + code : code - 100;
     info[0] = it;
     info[1] = gn_max_abs(h->F, size);
-    if (!gn_finite(h->F, size) || !gn_finite(h->J, size * size)) return -1;
-    if (info[1] <= abstol) return 1;
+    if (!gn_finite(h->F, size) || !gn_finite(h->J, size * size)) return gn_full(h, w, u, p, N, -1);
+    if (info[1] <= abstol) return gn_full(h, w, u, p, N, 1);
     memcpy(h->lu, h->J, sizeof(double) * size * size);
     if (gn_lu(h->lu, h->piv, size)) return -2;
     memcpy(h->step_v, h->F, sizeof(double) * size);
     gn_lu_solve(h->lu, h->piv, size, h->step_v);
-    if (gn_max_abs(h->step_v, size) <= abstol_step) return 2;
+    if (gn_max_abs(h->step_v, size) <= abstol_step) return gn_full(h, w, u, p, N, 2);
     for (i = 0; i < size; i++) w[i] -= h->step_v[i];
   }
   if ((code = gaitopt_newton_eval(h, w, u, p, N, 1))) return code > 0 ? 100 + code : code - 100;
