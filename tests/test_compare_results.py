@@ -55,3 +55,15 @@ def test_csv_cells_compared_by_column(tmp_path):
     assert _run(tmp_path, same, same, moved) == 1
     filled = ("speed,cot\n1.0,0.25\n", "speed,cot\n1.0,\n")  # a failed row now certified
     assert _run(tmp_path, same, same, filled) == 1
+
+
+def test_a_physical_duration_is_compared_and_a_work_time_is_not(tmp_path):
+    # A gait's step time or period is a number of the gait (1e-8 like any other); the time a
+    # solve or a continuation took (time_s, continuation_s, a "timing_s" block) measures the
+    # machine.
+    committed = {"step_time_s": 0.7344606213, "period_s": 1.5, "time_s": 1.0,
+                 "continuation_s": 2.0, "timing_s": {"sweep": 3.0}}  # fmt: skip
+    moved = {**committed, "time_s": 5.0, "continuation_s": 0.1, "timing_s": {"sweep": 0.2}}
+    assert _run(tmp_path, moved, committed) == 0
+    assert _run(tmp_path, {**committed, "step_time_s": 0.7344606213 * (1 + 1e-7)}, committed) == 1
+    assert _run(tmp_path, {**committed, "period_s": 1.5 * (1 + 1e-7)}, committed) == 1
