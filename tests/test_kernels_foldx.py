@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import simulated_return_map_fd
 
 import gaitopt
 from gaitopt.kernels import model_kernels
@@ -127,12 +128,5 @@ def test_kneed_return_map_against_finite_differences_of_the_simulated_map():
     A = ev.return_map[0]
     s = w[: t.problem.m]
 
-    def simulated(z):
-        sim = gaitopt.simulate(model, model.lift(z), steps=1, inputs=u, rtol=1e-12, atol=1e-13)
-        assert sim.success, sim.message
-        return model.section_coordinates_of(sim.section_states[-1])
-
-    h = 1e-6
-    A_fd = np.column_stack([(simulated(s + h * e) - simulated(s - h * e)) / (2 * h)
-                            for e in np.eye(s.size)])  # fmt: skip
+    A_fd = simulated_return_map_fd(model, s, u)
     assert np.max(np.abs(A - A_fd)) <= 1e-6 * (1 + np.max(np.abs(A_fd)))
