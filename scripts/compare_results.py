@@ -15,9 +15,10 @@ Exempt from the 1e-8 rule, because they are not reproducible to it by design:
   gait (a physical duration such as ``step_time_s`` or ``period_s`` is compared);
 * finite-difference estimates (fields named ``*_fd*``): their own accuracy is ~1e-6 … 1e-4
   (step-size noise), so they are compared to ``--fd-rtol`` (default 1e-3) instead;
-* error sizes (fields named ``*error*``, ``*residual*``, ``*gap*``): a discretisation-error
-  estimate or a return error is the size of a rounding-level quantity, reproduced when it stays
-  within a factor of 10 (or both are below ``atol``);
+* error sizes (fields named ``*error*``, ``*residual*``, ``*gap*``, ``*difference*``): a
+  discretisation-error estimate, a return error or two methods' difference is the size of a
+  rounding-level quantity, reproduced when it stays within a factor of 10 (or both are below
+  ``atol``);
 * numbers within 1e-6 of zero (a constraint's value at its touch point, a residual): compared
   absolutely, to 1e-9.
 
@@ -46,6 +47,7 @@ MACHINE_FIELDS = (
     "date",
     "version",
     "load",
+    "speedup",
 )
 
 #: Keys that time a piece of work (``time_s``: a solve's; ``continuation_s``, ``trials_s``, …):
@@ -54,6 +56,7 @@ MACHINE_FIELDS = (
 #: number of the gait and is compared like any other.
 WORK = (
     "time", "solve", "total", "total_cpu", "continuation", "trials", "transverse_lqr", "build",
+    "brute_force",
     "compile", "study", "sweep", "grid", "curve", "fraction", "slice", "rays", "map", "guesses",
 )  # fmt: skip
 
@@ -88,7 +91,7 @@ NEAR_ZERO_ATOL = 1e-9
 
 def _is_error_size(key: str) -> bool:
     key = key.lower()
-    return any(word in key for word in ("error", "residual", "gap"))
+    return any(word in key for word in ("error", "residual", "gap", "difference"))
 
 
 def _close(new: float, old: float, rtol: float, error_size: bool = False) -> bool:
