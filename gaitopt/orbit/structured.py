@@ -25,11 +25,11 @@ import numpy as np
 __all__ = ["STRUCTURED_MIN_SIZE", "BlockPattern", "solve"]
 
 #: Systems with at least this many unknowns are solved on their pattern (sparse LU); smaller ones
-#: densely.  Measured per solve (one BLAS thread, 2-core machine under load; ``python -m
-#: bench.branches``, ``results/bench_cascade.json``): the compass gait's period-8 system (135
-#: unknowns) 0.21 ms either way, period 16 (271) 1.26 ms dense vs 0.40 ms, period 32 (543) 13.7 vs
-#: 0.88 ms; the kneed walker's period 8 (333) 2.0 vs 0.44 ms.  Below 200 every built-in
-#: period-1 system stays dense (the largest, the planar quadruped's, has 194 unknowns).
+#: densely.  Measured per solve (one BLAS thread, the shared 2-core machine; ``python -m
+#: bench.branches``, ``results/bench_cascade.json``, "structured_solves"): the compass gait's
+#: period-8 system (135 unknowns) 0.21 ms dense vs 0.25 ms structured, period 16 (271) 0.87 vs
+#: 0.36 ms, period 32 (543) 3.9 vs 0.44 ms, period 64 (1087) 27 vs 0.87 ms.  Below 200 every
+#: built-in period-1 system stays dense (the largest, the planar quadruped's, has 194 unknowns).
 STRUCTURED_MIN_SIZE = 200
 
 
