@@ -238,8 +238,10 @@ def folder_written_whole(
     else:
         folder.parent.mkdir(parents=True, exist_ok=True)
         stage = _hidden_sibling(folder, "partial")
-    stage.mkdir()
     try:
+        # made inside the try: an interrupt that lands just after the folder is made (inside
+        # pathlib's mkdir, before it returns) still finds it removed by the finally
+        stage.mkdir()
         yield stage
         if replaces is not None and folder.is_dir():
             _carry_over(folder, stage, replaces)

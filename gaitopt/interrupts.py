@@ -59,11 +59,18 @@ def interrupts_outside_casadi() -> Iterator[None]:
         yield
         return
     retry: list[threading.Timer] = []
+    # The block's end and a retry's signal exclude each other: a retry timer already running when
+    # the block ends would otherwise signal after the handler is restored, and that late Ctrl-C
+    # would strike whatever the program does next (its exit, with status -2 instead of 130).
+    lock, ended = threading.Lock(), [False]
 
     def again() -> None:
-        retry.clear()
-        with contextlib.suppress(OSError, ValueError):  # the main thread has ended
-            signal.pthread_kill(main.ident, signal.SIGINT)
+        with lock:
+            retry.clear()
+            if ended[0]:
+                return
+            with contextlib.suppress(OSError, ValueError):  # the main thread has ended
+                signal.pthread_kill(main.ident, signal.SIGINT)
 
     def handler(signum: int, frame: FrameType | None) -> None:
         if not _inside_casadi(frame):
@@ -78,10 +85,18 @@ def interrupts_outside_casadi() -> Iterator[None]:
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-        pending = bool(retry)
-        for timer in list(retry):
-            timer.cancel()
+        with lock:
+            ended[0] = True
+            pending = bool(retry)
+            for timer in list(retry):
+                timer.cancel()
+        try:
+            # signal.signal first runs the handler of a signal already received (a retry sent
+            # just before the block ended): its KeyboardInterrupt, then the handler restored
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+        except KeyboardInterrupt:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+            raise
         if pending:  # pressed while the block's last CasADi call ran: it still counts
             raise KeyboardInterrupt
 
