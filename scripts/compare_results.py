@@ -68,6 +68,8 @@ def _is_machine(key: str) -> bool:
     for suffix in ("_s", "_time"):
         if key.endswith(suffix) and key[: -len(suffix)] in WORK:
             return True
+    if "_over_" in key and key.endswith("time"):  # a ratio of two times (loop_over_batch_time)
+        return True
     return key == "time"
 
 
