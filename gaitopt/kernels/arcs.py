@@ -27,7 +27,6 @@ package's source key); it is loaded with ``ctypes``.  Where there is no C compil
 from __future__ import annotations
 
 import ctypes
-import json
 import sys
 from collections.abc import Callable
 from functools import lru_cache
@@ -37,7 +36,7 @@ import casadi as ca
 import numpy as np
 
 from .arc_driver import DRIVER
-from .cache import _compile, _key, _write_index, cache_dir, compiler, source_key
+from .cache import _compile, _key, _write_index, cache_dir, compiler, indexed_entry, source_key
 from .verify import CHECKS_PER_STEP, phase_events
 
 __all__ = ["ArcLibrary", "arc_library"]
@@ -93,15 +92,10 @@ def _steps_library(model_cls) -> Path | None:
     from .verify import verification_steps
 
     name = f"gaitopt_{model_cls.__name__.lower()}_dop853"
-    key = source_key(name, model_cls)
-    if key is None or verification_steps(model_cls) is None:
+    if source_key(name, model_cls) is None or verification_steps(model_cls) is None:
         return None
-    try:
-        entry = json.loads((cache_dir() / "index" / f"{key}.json").read_text())
-        library = cache_dir() / entry["library"]
-    except (OSError, ValueError, KeyError, TypeError):
-        return None
-    return library if library.exists() else None
+    found = indexed_entry(name, model_cls)
+    return None if found is None else found[0]
 
 
 def _library_path(model_cls, verbose: bool) -> tuple[Path, Path | None] | None:
@@ -114,15 +108,12 @@ def _library_path(model_cls, verbose: bool) -> tuple[Path, Path | None] | None:
     steps = _steps_library(model_cls)
     name = f"gaitopt_{model_cls.__name__.lower()}_arcs"
     key = source_key(name, model_cls)
-    if key is not None:
-        try:
-            entry = json.loads((cache_dir() / "index" / f"{key}.json").read_text())
-            library = cache_dir() / entry["library"]
-            own = "step_0_c" in entry["functions"]  # the steps compiled in
-            if library.exists() and (own or steps is not None):
-                return library, None if own else steps
-        except (OSError, ValueError, KeyError, TypeError):
-            pass
+    found = indexed_entry(name, model_cls)
+    if found is not None:
+        library, entry = found
+        own = "step_0_c" in entry.get("functions", ())  # the steps compiled in
+        if own or steps is not None:
+            return library, None if own else steps
     functions = _functions(model_cls, steps=steps is None)
     gen = ca.CodeGenerator(f"{name}.c", {"with_header": False})
     for f in functions:

@@ -171,6 +171,20 @@ def source_key(name: str, model_cls: type) -> str | None:
     return sha256(ident.encode()).hexdigest()[:24]
 
 
+def indexed_entry(name: str, model_cls: type) -> tuple[Path, dict] | None:
+    """The compiled library the cache's index lists for ``name`` of ``model_cls`` and its index
+    entry, or None (no key, not listed, an unreadable entry or a missing library)."""
+    key = source_key(name, model_cls)
+    if key is None:
+        return None
+    try:
+        entry = json.loads((cache_dir() / "index" / f"{key}.json").read_text())
+        library = cache_dir() / entry["library"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return (library, entry) if library.exists() else None
+
+
 def remembered(name: str, model_cls: type, build: Callable[[], Any]) -> Any:
     """``build()`` for a model class, kept pickled in the cache directory (``objects/``) under
     the class's :func:`source_key` and the Python version, and unpickled from there later.

@@ -17,7 +17,6 @@ stopping tests, the same root to rounding (``tests/test_newton_compiled.py``).
 from __future__ import annotations
 
 import ctypes
-import json
 import sys
 import threading
 import weakref
@@ -27,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from .cache import FLAGS_O2, _compile, _key, cache_dir, compiler, source_key
+from .cache import FLAGS_O2, _compile, _key, cache_dir, compiler, indexed_entry
 from .evaluation import Evaluation
 from .newton_driver import SOURCE
 
@@ -83,15 +82,8 @@ def driver(verbose: bool = True) -> ctypes.CDLL | None:
 def _indexed(name: str, model_cls) -> Path | None:
     """The compiled library the cache's index lists for ``name`` of ``model_cls`` (None: not
     listed, or missing)."""
-    key = source_key(name, model_cls)
-    if key is None:
-        return None
-    try:
-        entry = json.loads((cache_dir() / "index" / f"{key}.json").read_text())
-        library = cache_dir() / entry["library"]
-    except (OSError, ValueError, KeyError, TypeError):
-        return None
-    return library if library.exists() else None
+    found = indexed_entry(name, model_cls)
+    return None if found is None else found[0]
 
 
 def _spec(f) -> np.ndarray:
