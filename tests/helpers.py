@@ -26,6 +26,14 @@ def load_study(name: str) -> ModuleType:
     return module
 
 
+def rows_by_speed(path: Path) -> dict[float, dict[str, str]]:
+    """The rows of a study's CSV keyed by their ``speed_m_per_s`` (rounded to 0.01 m/s)."""
+    import csv
+
+    with open(path, encoding="utf-8") as f:
+        return {round(float(r["speed_m_per_s"]), 2): r for r in csv.DictReader(f)}
+
+
 def run_study(name: str, out: Path, *extra: str) -> Path:
     """Run the study in its fast mode, writing under ``out``; the folder of its results."""
     assert load_study(name).main(["--out", str(out), "--fast", *extra]) == 0

@@ -5,26 +5,16 @@ the committed study output."""
 from __future__ import annotations
 
 import csv
-import importlib.util
 from pathlib import Path
 
 import pytest
+from helpers import load_study, rows_by_speed
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def _committed() -> dict[float, dict[str, str]]:
-    with open(ROOT / "results" / "optimal_kneed_knee" / "knee.csv", encoding="utf-8") as f:
-        return {round(float(r["speed_m_per_s"]), 2): r for r in csv.DictReader(f)}
-
-
-def _study():
-    spec = importlib.util.spec_from_file_location(
-        "optimal_kneed_knee", ROOT / "problems" / "optimal_kneed_knee.py"
-    )
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return rows_by_speed(ROOT / "results" / "optimal_kneed_knee" / "knee.csv")
 
 
 @pytest.mark.slow
@@ -37,7 +27,7 @@ def test_fast_mode_certifies_the_knee_powered_optimum(tmp_path):
     # work, to 1e-8 relative; 5e-13 measured).  The same statement from the same start as the
     # full run, so the same cost as the committed row, to the 1e-8 target.  About 2 min on the
     # loaded 2-core machine: slow.
-    study = _study()
+    study = load_study("optimal_kneed_knee")
     assert study.main(["--out", str(tmp_path), "--fast"]) == 0
     with open(tmp_path / "optimal_kneed_knee" / "knee.csv", encoding="utf-8") as f:
         (row,) = list(csv.DictReader(f))

@@ -5,26 +5,16 @@ study output."""
 from __future__ import annotations
 
 import csv
-import importlib.util
 from pathlib import Path
 
 import pytest
+from helpers import load_study, rows_by_speed
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def _committed() -> dict[float, dict[str, str]]:
-    with open(ROOT / "results" / "optimal_kneed_level" / "level.csv", encoding="utf-8") as f:
-        return {round(float(r["speed_m_per_s"]), 2): r for r in csv.DictReader(f)}
-
-
-def _study():
-    spec = importlib.util.spec_from_file_location(
-        "optimal_kneed_level", ROOT / "problems" / "optimal_kneed_level.py"
-    )
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return rows_by_speed(ROOT / "results" / "optimal_kneed_level" / "level.csv")
 
 
 @pytest.mark.slow
@@ -36,7 +26,7 @@ def test_fast_mode_certifies_and_is_no_lower_than_the_full_library(tmp_path):
     # over more speeds), so a fast-mode optimum may be no lower than the committed one at the
     # same speed (beyond 1e-8 relative, the certificate's target): a lower one would mean the
     # full library missed a minimum.  Several minutes on the loaded 2-core machine: slow.
-    study = _study()
+    study = load_study("optimal_kneed_level")
     assert study.main(["--out", str(tmp_path), "--fast"]) == 0
     with open(tmp_path / "optimal_kneed_level" / "level.csv", encoding="utf-8") as f:
         rows = list(csv.DictReader(f))
