@@ -376,4 +376,12 @@ def _run(args: argparse.Namespace) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    _status = main()
+    if _status == 130:
+        # Interrupted, and every folder already as its last complete write left it: a second
+        # Ctrl-C while the interpreter shuts down (Python then puts SIGINT back to its default
+        # action) would end the process by the signal, status -2 instead of 130.
+        import signal
+
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    sys.exit(_status)
