@@ -101,17 +101,13 @@ class ClosedLoopBatch:
         """One run's end in words (as :attr:`gaitopt.Simulation.message` says it)."""
         status, k, t = str(self.status[i]), int(self.survived[i]), float(self.t_end[i])
         phase = self.model.phases[int(self.phase_end[i])].name
-        if status == "completed":
-            return f"{k} steps in {t:.6g} s"
         if status == "fell":
             return f"{self.outcome[i]} at t = {t:.6g} s after {k} steps"
         if status == "standing":
             return f"at rest (standing) at t = {t:.6g} s after {k} steps"
-        if status == "timeout":
-            return f"no transition within the phase time limit in phase '{phase}' (t = {t:.6g})"
-        if status == "failed":
-            return f"integrator failed in phase '{phase}' at t = {t:.6g}"
-        return "not a state of the model (not finite, or its rate of change is not)"
+        from ..simulation.batch import end_message
+
+        return end_message(status, k, t, phase)
 
     def apex_errors(self, skip: int = 1) -> tuple[np.ndarray, np.ndarray]:
         """Per start, the RMS and the largest error over the returns after the first ``skip``

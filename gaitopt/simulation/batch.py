@@ -98,17 +98,11 @@ class BatchSimulation:
         status, k = str(self.status[i]), int(self.steps[i])
         phase = self.model.phases[int(self.phase_end[i])].name
         t = float(self.t_end[i])
-        if status == "completed":
-            return f"{k} steps in {t:.6g} s"
         if status == "fell":
             return f"{self.outcome[i]} at t = {t:.6g} s after {k} steps in phase '{phase}'"
         if status == "standing":
             return f"at rest (standing) by t = {self.accumulation_time[i]:.6g} s after {k} steps"
-        if status == "timeout":
-            return f"no transition within the phase time limit in phase '{phase}' (t = {t:.6g})"
-        if status == "failed":
-            return f"integrator failed in phase '{phase}' at t = {t:.6g}"
-        return "not a state of the model (not finite, or its rate of change is not)"
+        return end_message(status, k, t, phase)
 
     def events_of(self, i: int) -> list[tuple[float, int, str, np.ndarray, np.ndarray | None]]:
         """One start's events as ``(t, phase, transition, before, after)`` (``after`` None for
@@ -132,6 +126,19 @@ class BatchSimulation:
                 )
             )
         return out
+
+
+def end_message(status: str, steps: int, t: float, phase: str) -> str:
+    """A batched run's end in words for the statuses every batch words alike: ``completed``
+    after ``steps`` returns at ``t`` (s), ``timeout`` or ``failed`` in ``phase``, else an
+    invalid start (``fell`` and ``standing`` are worded by each caller)."""
+    if status == "completed":
+        return f"{steps} steps in {t:.6g} s"
+    if status == "timeout":
+        return f"no transition within the phase time limit in phase '{phase}' (t = {t:.6g})"
+    if status == "failed":
+        return f"integrator failed in phase '{phase}' at t = {t:.6g}"
+    return "not a state of the model (not finite, or its rate of change is not)"
 
 
 def simulate_batch(
